@@ -1,0 +1,3 @@
+from rostool.cli import main
+
+main()

@@ -1,0 +1,120 @@
+"""Root click group: global options and lazy loading of the command groups.
+
+Command modules are imported only when their group is invoked, so `rostool --help`
+never loads the ROS machinery.
+"""
+
+from __future__ import annotations
+
+import importlib
+import sys
+from dataclasses import dataclass
+
+import click
+
+from rostool import __version__
+from rostool.errors import RostoolError
+
+# name -> (module, attribute, one-line help shown by `rostool --help` without importing it)
+COMMANDS: dict[str, tuple[str, str, str]] = {
+    "core": ("rostool.commands.core", "core", "Run an embedded ROS 1 master and parameter server."),
+    "node": ("rostool.commands.node", "node", "List, inspect, ping and kill nodes."),
+    "topic": ("rostool.commands.topic", "topic", "List, echo, publish and measure topics."),
+    "param": ("rostool.commands.param", "param", "Get, set, dump and load parameters."),
+    "msg": ("rostool.commands.msg", "msg", "Show message types."),
+    "bag": ("rostool.commands.bag", "bag", "Inspect, play, record and convert bags (.bag, .db3, .mcap)."),
+    "cheatsheet": (
+        "rostool.commands.cheatsheet",
+        "cheatsheet",
+        "Search the ROS 1 / ROS 2 / rostool command reference.",
+    ),
+}
+
+
+@dataclass
+class Settings:
+    """Options given before the verb, shared with every command through click's context."""
+
+    ros_version: int | None = None
+
+
+class LazyGroup(click.Group):
+    """A group whose subcommands are imported on first use."""
+
+    def list_commands(self, ctx: click.Context) -> list[str]:
+        available = [name for name, spec in COMMANDS.items() if _module_exists(spec[0])]
+        return sorted(available)
+
+    def get_command(self, ctx: click.Context, cmd_name: str) -> click.Command | None:
+        spec = COMMANDS.get(cmd_name)
+        if spec is None or not _module_exists(spec[0]):
+            return None
+        module = importlib.import_module(spec[0])
+        command: click.Command = getattr(module, spec[1])
+        return command
+
+    def format_commands(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:
+        rows = [(name, COMMANDS[name][2]) for name in self.list_commands(ctx)]
+        if not rows:
+            return
+        with formatter.section("Commands"):
+            formatter.write_dl(rows)
+
+    def invoke(self, ctx: click.Context) -> object:
+        try:
+            return super().invoke(ctx)
+        except RostoolError as err:
+            click.echo(f"rostool: {err}", err=True)
+            ctx.exit(err.exit_code)
+        except KeyboardInterrupt:
+            ctx.exit(130)
+        except BrokenPipeError:
+            # A closed pipe (e.g. `| head`) is a normal end; stop quietly.
+            _silence_stdout()
+            ctx.exit(0)
+        return None
+
+
+def _module_exists(module: str) -> bool:
+    from importlib.util import find_spec
+
+    return find_spec(module) is not None
+
+
+def _silence_stdout() -> None:
+    import os
+
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, sys.stdout.fileno())
+
+
+@click.group(
+    cls=LazyGroup,
+    context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100},
+)
+@click.option("--ros1", "ros_version", flag_value=1, help="Talk to a ROS 1 graph.")
+@click.option("--ros2", "ros_version", flag_value=2, help="Talk to a ROS 2 graph (over DDS).")
+@click.version_option(__version__, prog_name="rostool")
+@click.pass_context
+def root(ctx: click.Context, ros_version: int | None) -> None:
+    """rostool: rosnode, rostopic, rosparam, rosbag, rosservice and actionlib tools in one.
+
+    Works with ROS 1 and ROS 2 graphs and with .bag, .db3 and .mcap bags, without a ROS installation.
+    Without --ros1/--ros2 the version comes from ROS_VERSION, else ROS 1 when ROS_MASTER_URI is set
+    or a master answers on localhost:11311, else ROS 2.
+
+    \b
+    Examples:
+      rostool topic list
+      rostool topic echo /hello_world -n 3
+      rostool param get /rosdistro
+      rostool bag info test.bag
+    """
+    ctx.obj = Settings(ros_version=ros_version)
+
+
+def main() -> None:
+    try:
+        root.main(prog_name="rostool")
+    except KeyboardInterrupt:
+        sys.exit(130)

@@ -1,0 +1,49 @@
+"""The live graph: which ROS version to talk to, and the backend that implements it."""
+
+from __future__ import annotations
+
+import os
+import socket
+from typing import TYPE_CHECKING
+
+from rostool.errors import RostoolError
+
+if TYPE_CHECKING:
+    from rostool.graph.base import Graph
+
+DEFAULT_MASTER_URI = "http://localhost:11311"
+
+
+def select_ros_version(explicit: int | None) -> int:
+    """--ros1/--ros2, else ROS_VERSION, else ROS 1 when a master is configured or answers, else ROS 2."""
+    if explicit in (1, 2):
+        return explicit
+    env_version = os.environ.get("ROS_VERSION", "").strip()
+    if env_version in ("1", "2"):
+        return int(env_version)
+    if os.environ.get("ROS_MASTER_URI"):
+        return 1
+    if _port_answers("127.0.0.1", 11311):
+        return 1
+    return 2
+
+
+def _port_answers(host: str, port: int, timeout: float = 0.2) -> bool:
+    try:
+        with socket.create_connection((host, port), timeout=timeout):
+            return True
+    except OSError:
+        return False
+
+
+def open_graph(explicit_version: int | None, node_name: str = "rostool") -> Graph:
+    """Connect to the live graph of the selected ROS version."""
+    version = select_ros_version(explicit_version)
+    if version == 2:
+        raise RostoolError(
+            "ROS 2 graphs are not supported yet by this rostool version; "
+            "use --ros1 (with a ROS 1 master) or the bag verbs, which read ROS 2 bags"
+        )
+    from rostool.graph.ros1.graph import Ros1Graph
+
+    return Ros1Graph(node_name)
