@@ -7,6 +7,7 @@ never loads the ROS machinery.
 from __future__ import annotations
 
 import importlib
+import os
 import sys
 from dataclasses import dataclass
 
@@ -118,3 +119,12 @@ def main() -> None:
         root.main(prog_name="rostool")
     except KeyboardInterrupt:
         sys.exit(130)
+    except Exception as err:
+        # A bug of ours, not the user's: still one line, with a way to see the details.
+        if os.environ.get("ROSTOOL_DEBUG"):
+            raise
+        click.echo(
+            f"rostool: internal error: {type(err).__name__}: {err} (set ROSTOOL_DEBUG=1 for details)",
+            err=True,
+        )
+        sys.exit(70)

@@ -1,0 +1,43 @@
+"""Small helpers every command shares."""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
+from typing import TYPE_CHECKING, Any
+
+import click
+
+if TYPE_CHECKING:
+    from rostool.graph.base import Graph
+
+
+def ros_version(ctx: click.Context) -> int | None:
+    settings = ctx.find_root().obj
+    return getattr(settings, "ros_version", None)
+
+
+@contextmanager
+def live_graph(ctx: click.Context) -> Iterator[Graph]:
+    """The selected live graph, always closed (unregistered) on the way out, Ctrl+C included."""
+    from rostool.graph import open_graph
+
+    graph = open_graph(ros_version(ctx))
+    try:
+        yield graph
+    finally:
+        graph.close()
+
+
+def print_json(value: Any) -> None:
+    from rostool.output.json_text import dumps
+
+    click.echo(dumps(value))
+
+
+def stdout_is_tty() -> bool:
+    return sys.stdout.isatty()
+
+
+json_option = click.option("--json", "as_json", is_flag=True, help="Print JSON for scripts.")

@@ -1,0 +1,79 @@
+"""`topic pub`: build messages from YAML and publish them once, latched, or at a steady rate."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from rostool.errors import RostoolError
+from rostool.graph.base import Graph
+from rostool.interfaces.values import message_args
+
+ONCE_LATCH_SECONDS = 3.0
+
+
+def _file_messages(path: str) -> list[Any]:
+    try:
+        docs = [doc for doc in yaml.safe_load_all(Path(path).read_text()) if doc is not None]
+    except (OSError, yaml.YAMLError) as err:
+        raise RostoolError(f"cannot read messages from {path}: {err}") from err
+    if not docs:
+        raise RostoolError(f"{path} holds no messages (YAML documents separated by ---)")
+    return docs
+
+
+def publish_loop(
+    graph: Graph,
+    topic: str,
+    type_name: str,
+    values: tuple[str, ...],
+    *,
+    rate: float | None,
+    once: bool,
+    latch: bool,
+    count: int | None,
+    file: str | None,
+    say: Callable[[str], None],
+) -> None:
+    raw = _file_messages(file) if file else [message_args(values)]
+    messages = [graph.build_message(type_name, value) for value in raw]
+    latched = latch or rate is None
+    publisher = graph.publisher(topic, type_name, latch=latched)
+    if rate is None and not file:
+        publisher.publish(messages[0])
+        if once:
+            say(f"publishing and latching message for {ONCE_LATCH_SECONDS:.1f} seconds")
+            _linger(graph, topic, publisher, ONCE_LATCH_SECONDS)
+            return
+        say("publishing and latching message. Press ctrl-C to terminate")
+        while True:
+            time.sleep(3600)
+    period = 1.0 / (rate or 10.0)
+    total = count if count is not None else (len(messages) if file and rate is None else None)
+    if once:
+        total = len(messages)
+    say(f"publishing {type_name} on {topic}" + (f" at {rate:g} Hz" if rate else ""))
+    # Absolute scheduling: each message has its own due time, so the rate never drifts.
+    start = time.perf_counter()
+    sent = 0
+    while total is None or sent < total:
+        due = start + sent * period
+        delay = due - time.perf_counter()
+        if delay > 0:
+            time.sleep(delay)
+        publisher.publish(messages[sent % len(messages)])
+        sent += 1
+    if latched or once:
+        _linger(graph, topic, publisher, min(ONCE_LATCH_SECONDS, 1.0))
+
+
+def _linger(graph: Graph, topic: str, publisher: Any, seconds: float) -> None:
+    """Stay up until every subscriber the master knows has connected (at most `seconds`)."""
+    deadline = time.monotonic() + seconds
+    wanted = len(next((t.subscribers for t in graph.topics() if t.name == publisher.topic), []))
+    publisher.wait_for_subscribers(wanted, max(0.0, deadline - time.monotonic()))
+    time.sleep(max(0.0, deadline - time.monotonic()))

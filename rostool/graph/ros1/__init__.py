@@ -1,0 +1,1 @@
+"""Native ROS 1 client: XML-RPC master/slave APIs, TCPROS, embedded master."""

@@ -1,0 +1,44 @@
+"""ROS 1 environment: ROS_MASTER_URI, ROS_HOSTNAME, ROS_IP, ROS_NAMESPACE."""
+
+from __future__ import annotations
+
+import os
+import socket
+from urllib.parse import urlparse
+
+DEFAULT_MASTER_URI = "http://localhost:11311"
+
+
+def master_uri() -> str:
+    return os.environ.get("ROS_MASTER_URI") or DEFAULT_MASTER_URI
+
+
+def _is_loopback(host: str) -> bool:
+    return host in ("localhost", "::1") or host.startswith("127.")
+
+
+def advertised_host() -> str:
+    """The host name peers use to reach us (ROS_HOSTNAME, else ROS_IP, else as rospy decides)."""
+    for var in ("ROS_HOSTNAME", "ROS_IP"):
+        value = os.environ.get(var, "").strip()
+        if value:
+            return value
+    master_host = urlparse(master_uri()).hostname or "localhost"
+    if _is_loopback(master_host):
+        return "127.0.0.1"
+    return socket.gethostname()
+
+
+def bind_host() -> str:
+    """Bind loopback when we advertise a loopback name (as rospy does), all interfaces otherwise."""
+    host = advertised_host()
+    if _is_loopback(host):
+        return "127.0.0.1" if host == "localhost" else host
+    return "0.0.0.0"
+
+
+def namespace() -> str:
+    value = os.environ.get("ROS_NAMESPACE", "/").strip() or "/"
+    if not value.startswith("/"):
+        value = "/" + value
+    return value if value.endswith("/") else value + "/"

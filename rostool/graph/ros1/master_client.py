@@ -1,0 +1,130 @@
+"""Client of the ROS 1 Master and Parameter Server XML-RPC APIs."""
+
+from __future__ import annotations
+
+import http.client
+import xmlrpc.client
+from typing import Any
+
+from rostool.errors import RostoolError
+
+DEFAULT_TIMEOUT = 5.0
+
+
+class _TimeoutTransport(xmlrpc.client.Transport):
+    def __init__(self, timeout: float) -> None:
+        super().__init__()
+        self._timeout = timeout
+
+    def make_connection(self, host: Any) -> http.client.HTTPConnection:
+        connection = super().make_connection(host)
+        connection.timeout = self._timeout
+        return connection
+
+
+def server_proxy(uri: str, timeout: float = DEFAULT_TIMEOUT) -> xmlrpc.client.ServerProxy:
+    return xmlrpc.client.ServerProxy(uri, transport=_TimeoutTransport(timeout), allow_none=False)
+
+
+class RemoteError(RostoolError):
+    """The remote side answered with a failure code."""
+
+
+class Unreachable(RostoolError):
+    """Nothing answered at the URI (refused, timed out, unknown host)."""
+
+
+def call(uri: str, method: str, *args: Any, what: str, timeout: float = DEFAULT_TIMEOUT) -> Any:
+    """Call an XML-RPC method that answers [code, status, value]; return value or raise one clear error."""
+    proxy = server_proxy(uri, timeout)
+    try:
+        code, status, value = getattr(proxy, method)(*args)
+    except OSError as err:
+        raise Unreachable(f"cannot reach {what} at {uri}: {_reason(err)}") from err
+    except (xmlrpc.client.Fault, xmlrpc.client.ProtocolError) as err:
+        raise RostoolError(f"{what} at {uri} failed on {method}: {err}") from err
+    if code != 1:
+        raise RemoteError(f"{status}")
+    return value
+
+
+def _reason(err: BaseException) -> str:
+    if isinstance(err, ConnectionRefusedError):
+        return "connection refused"
+    if isinstance(err, TimeoutError):
+        return "timed out"
+    return str(err) or type(err).__name__
+
+
+class MasterClient:
+    """The master's API as seen by one caller (node name)."""
+
+    def __init__(self, uri: str, caller_id: str) -> None:
+        self.uri = uri
+        self.caller_id = caller_id
+
+    def _call(self, method: str, *args: Any) -> Any:
+        try:
+            return call(self.uri, method, self.caller_id, *args, what="the ROS master")
+        except Unreachable as err:
+            raise RostoolError(
+                f"cannot reach the ROS master at {self.uri} (ROS_MASTER_URI); start one with "
+                "`rostool core` or `roscore`, or point ROS_MASTER_URI at a running master"
+            ) from err
+
+    # Master API
+    def get_pid(self) -> int:
+        return int(self._call("getPid"))
+
+    def system_state(self) -> tuple[list[Any], list[Any], list[Any]]:
+        publishers, subscribers, services = self._call("getSystemState")
+        return publishers, subscribers, services
+
+    def topic_types(self) -> dict[str, str]:
+        return dict(self._call("getTopicTypes"))
+
+    def published_topics(self, subgraph: str = "") -> dict[str, str]:
+        return dict(self._call("getPublishedTopics", subgraph))
+
+    def lookup_node(self, name: str) -> str:
+        return str(self._call("lookupNode", name))
+
+    def lookup_service(self, name: str) -> str:
+        return str(self._call("lookupService", name))
+
+    def register_publisher(self, topic: str, type_name: str, api: str) -> list[str]:
+        return list(self._call("registerPublisher", topic, type_name, api))
+
+    def unregister_publisher(self, topic: str, api: str) -> None:
+        self._call("unregisterPublisher", topic, api)
+
+    def register_subscriber(self, topic: str, type_name: str, api: str) -> list[str]:
+        return list(self._call("registerSubscriber", topic, type_name, api))
+
+    def unregister_subscriber(self, topic: str, api: str) -> None:
+        self._call("unregisterSubscriber", topic, api)
+
+    def register_service(self, service: str, service_api: str, api: str) -> None:
+        self._call("registerService", service, service_api, api)
+
+    def unregister_service(self, service: str, service_api: str) -> None:
+        self._call("unregisterService", service, service_api)
+
+    # Parameter server API
+    def get_param(self, key: str) -> Any:
+        return self._call("getParam", key)
+
+    def set_param(self, key: str, value: Any) -> None:
+        self._call("setParam", key, value)
+
+    def delete_param(self, key: str) -> None:
+        self._call("deleteParam", key)
+
+    def has_param(self, key: str) -> bool:
+        return bool(self._call("hasParam", key))
+
+    def param_names(self) -> list[str]:
+        return list(self._call("getParamNames"))
+
+    def search_param(self, key: str) -> str:
+        return str(self._call("searchParam", key))

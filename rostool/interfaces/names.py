@@ -1,0 +1,19 @@
+"""Type-name spellings: ROS 1 `pkg/Type`, ROS 2 / rosbags `pkg/msg/Type`."""
+
+from __future__ import annotations
+
+
+def to_store_name(name: str, kind: str = "msg") -> str:
+    """`std_msgs/String` -> `std_msgs/msg/String` (already-qualified names pass through)."""
+    parts = name.strip("/").split("/")
+    if len(parts) == 2:
+        return f"{parts[0]}/{kind}/{parts[1]}"
+    return "/".join(parts)
+
+
+def to_ros1_name(name: str) -> str:
+    """`std_msgs/msg/String` -> `std_msgs/String`."""
+    parts = name.split("/")
+    if len(parts) == 3:
+        return f"{parts[0]}/{parts[2]}"
+    return name

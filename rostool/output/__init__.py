@@ -1,0 +1,1 @@
+"""Renderers: message objects (from the wire or a bag) to YAML, JSON, CSV and tables."""
