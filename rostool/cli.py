@@ -22,7 +22,7 @@ COMMANDS: dict[str, tuple[str, str, str]] = {
     "node": ("rostool.commands.node", "node", "List, inspect, ping and kill nodes."),
     "topic": ("rostool.commands.topic", "topic", "List, echo, publish and measure topics."),
     "param": ("rostool.commands.param", "param", "Get, set, dump and load parameters."),
-    "msg": ("rostool.commands.msg", "msg", "Show message types."),
+    "msg": ("rostool.commands.msg", "msg", "Show message types and their md5sums."),
     "bag": ("rostool.commands.bag", "bag", "Inspect, play, record and convert bags (.bag, .db3, .mcap)."),
     "cheatsheet": (
         "rostool.commands.cheatsheet",

@@ -125,11 +125,13 @@ def debian_popen(args: Sequence[str], env: dict[str, str], **kwargs: object) -> 
     )
 
 
-def start_rospy_script(source: str, env: dict[str, str], tmp_path: Path, name: str) -> subprocess.Popen[str]:
+def start_rospy_script(
+    source: str, env: dict[str, str], tmp_path: Path, name: str, args: Sequence[str] = ()
+) -> subprocess.Popen[str]:
     """Run a small rospy program with Debian's python3 (a real ROS 1 peer node)."""
     script = tmp_path / f"{name}.py"
     script.write_text(source)
-    return debian_popen([DEBIAN_PYTHON, str(script)], env)
+    return debian_popen([DEBIAN_PYTHON, str(script), *args], env)
 
 
 def stop(proc: subprocess.Popen[str], timeout: float = 5.0) -> tuple[str, str]:
