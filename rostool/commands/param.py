@@ -25,11 +25,11 @@ def param() -> None:
 
 
 def _yaml_text(value: Any) -> str:
-    """What rosparam prints: YAML, without the document-end marker PyYAML adds to scalars."""
+    """YAML of a value as rosparam writes it; PyYAML's document-end marker after scalars is dropped."""
     import yaml
 
-    text = yaml.safe_dump(value, default_flow_style=False, allow_unicode=True)
-    return text.removesuffix("...\n")
+    text = yaml.safe_dump(value, default_flow_style=False)
+    return text[:-5] if text.endswith("\n...\n") else text
 
 
 @param.command("list")
@@ -71,10 +71,10 @@ def get(ctx: click.Context, name: str, as_json: bool) -> None:
     if as_json:
         print_json(value)
     else:
-        click.echo(_yaml_text(value), nl=False)
+        click.echo(_yaml_text(value))  # rosparam get adds a newline after the YAML, so do we
 
 
-@param.command("set")
+@param.command("set", context_settings={"ignore_unknown_options": True})
 @click.argument("name")
 @click.argument("value")
 @click.option("-t", "--textfile", is_flag=True, help="VALUE is a file whose text becomes a string parameter.")
@@ -138,7 +138,7 @@ def dump(ctx: click.Context, file: str, namespace: str) -> None:
     """
     with live_graph(ctx) as graph:
         value = graph.get_param(namespace)
-    text = _yaml_text(value)
+    text = _yaml_text(value).rstrip("\n") + "\n"
     if file == "-":
         click.echo(text, nl=False)
         return

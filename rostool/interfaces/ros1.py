@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any
 
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
+import rostool.interfaces.rosbags_fix  # noqa: F401 - must run before types are registered
 from rostool.errors import RostoolError
 from rostool.interfaces.names import to_ros1_name, to_store_name
 

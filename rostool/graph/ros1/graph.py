@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import time
 from collections.abc import Callable
 from typing import Any
@@ -89,7 +90,9 @@ class Ros1Graph:
 
     def kill(self, name: str) -> None:
         uri = self.node_uri(name)
-        call(uri, "shutdown", self.master.caller_id, "user request", what=f"node {resolve(name)}", timeout=3)
+        # A node often closes its server while answering; like rosnode, that counts as killed.
+        with contextlib.suppress(Unreachable, RemoteError):
+            call(uri, "shutdown", self.master.caller_id, "user request", what=f"node {name}", timeout=3)
 
     # --- topics -------------------------------------------------------------------------------
     def topics(self) -> list[TopicInfo]:
