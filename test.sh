@@ -5,7 +5,7 @@ set -euo pipefail
 cd "$(dirname "$0")"
 
 ros_packages=(ros-core python3-rospy python3-actionlib python3-actionlib-tools python3-std-msgs
-  python3-geometry-msgs python3-sensor-msgs ros-std-srvs)
+  python3-geometry-msgs python3-sensor-msgs ros-std-srvs python3-std-srvs)
 if ! { command -v rosmaster && /usr/bin/python3 -c 'import rospy, actionlib, std_srvs.srv, sensor_msgs.msg'; } \
   >/dev/null 2>&1; then
   if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then

@@ -182,3 +182,15 @@ print(json.dumps(out))
         shown = rostool(["msg", "show", name], env).stdout.splitlines()
         top_level = [line for line in shown if line and not line.startswith(" ") and "=" not in line]
         assert top_level == [f"{t} {n}" for n, t in slots], name
+
+
+def test_param_set_mapping_updates_like_rosparam(debian_master: dict[str, str]) -> None:
+    env = debian_master
+    for tool in (rostool, debian):
+        prefix = "/ours" if tool is rostool else "/theirs"
+        command = ["param", "set"] if tool is rostool else ["rosparam", "set"]
+        assert tool([*command, f"{prefix}/robot", "{name: r2, wheels: 4}"], env).returncode == 0
+        assert tool([*command, f"{prefix}/robot", "{wheels: 6}"], env).returncode == 0
+    ours = yaml.safe_load(debian(["rosparam", "get", "/ours/robot"], env).stdout)
+    theirs = yaml.safe_load(debian(["rosparam", "get", "/theirs/robot"], env).stdout)
+    assert ours == theirs == {"name": "r2", "wheels": 6}

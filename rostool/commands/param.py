@@ -103,6 +103,11 @@ def _read_text(path: str) -> str:
 
 
 def _set_checked(graph: Any, name: str, value: Any) -> None:
+    """Set like rosparam: a mapping updates the namespace key by key instead of replacing it."""
+    if isinstance(value, dict):
+        for key, item in value.items():
+            _set_checked(graph, _join(name, str(key)), item)
+        return
     try:
         graph.set_param(name, value)
     except OverflowError as err:
@@ -171,8 +176,7 @@ def load(ctx: click.Context, file: str, namespace: str) -> None:
     prefix = resolve(namespace)
     with live_graph(ctx) as graph:
         if isinstance(value, dict):
-            for key, item in value.items():
-                _set_checked(graph, _join(prefix, str(key)), item)
+            _set_checked(graph, prefix, value)
         elif value is None:
             raise RostoolError(f"{file} holds no parameters")
         else:
