@@ -195,7 +195,7 @@ def echo(
             click.echo(f"WARNING: topic [{name}] does not appear to be published yet", err=True)
         inbox = Inbox(graph, name)
         shown = 0
-        for received in inbox.messages(timeout):
+        for received in inbox.messages(timeout, on_idle=out.flush):
             try:
                 message = received.decode()
             except RostoolError:
@@ -206,7 +206,7 @@ def echo(
                 continue
             out.write(renderer.render(message, received.recv_time_ns) + "\n")
             shown += 1
-            if interactive or inbox.backlog() == 0:
+            if interactive:
                 out.flush()
             if limit is not None and shown >= limit:
                 break

@@ -34,15 +34,22 @@ class NodeInfo:
     connections: list[Connection]
 
 
-@dataclass
 class Received:
-    """One message as it arrived: raw bytes plus what is needed to decode them on demand."""
+    """One message as it arrived: raw bytes plus the decoder of its connection, used on demand."""
 
-    topic: str
-    payload: bytes
-    recv_time_ns: int
-    type_name: str
-    decode: Callable[[], Any]
+    __slots__ = ("decoder", "payload", "recv_time_ns", "topic", "type_name")
+
+    def __init__(
+        self, topic: str, payload: bytes, recv_time_ns: int, type_name: str, decoder: Callable[[bytes], Any]
+    ) -> None:
+        self.topic = topic
+        self.payload = payload
+        self.recv_time_ns = recv_time_ns
+        self.type_name = type_name
+        self.decoder = decoder
+
+    def decode(self) -> Any:
+        return self.decoder(self.payload)
 
 
 class Subscription(Protocol):

@@ -1,46 +1,62 @@
-"""A subscription whose messages wait in a queue for the main thread (echo, delay)."""
+"""A subscription whose messages wait for the main thread (echo, delay).
+
+Network threads append to a deque (no lock per message) and wake the consumer only when it sleeps;
+the consumer drains everything available and runs `on_idle` (e.g. flush stdout) before it waits.
+"""
 
 from __future__ import annotations
 
-import queue
+import threading
 import time
-from collections.abc import Iterator
+from collections import deque
+from collections.abc import Callable, Iterator
 
 from rostool.errors import RostoolError
 from rostool.graph.base import Graph, Received, Subscription
+
+BACKLOG_LIMIT = 20000
 
 
 class Inbox:
     """Collects messages from network threads; the caller iterates in its own thread."""
 
-    def __init__(self, graph: Graph, topic: str, maxsize: int = 10000) -> None:
-        self._queue: queue.Queue[Received | str] = queue.Queue(maxsize)
+    def __init__(self, graph: Graph, topic: str) -> None:
+        self._items: deque[Received | str] = deque()
+        self._wake = threading.Event()
         self.subscription: Subscription = graph.subscribe(topic, self._put, self._error)
 
-    def _put(self, received: Received) -> None:
-        self._queue.put(received)
+    def _put(self, received: Received | str) -> None:
+        while len(self._items) > BACKLOG_LIMIT:  # backpressure onto TCP instead of unbounded memory
+            time.sleep(0.001)
+        self._items.append(received)
+        if not self._wake.is_set():
+            self._wake.set()
 
     def _error(self, message: str) -> None:
-        self._queue.put(message)
+        self._put(message)
 
-    def backlog(self) -> int:
-        return self._queue.qsize()
-
-    def messages(self, timeout: float | None = None) -> Iterator[Received]:
+    def messages(
+        self, timeout: float | None = None, on_idle: Callable[[], None] | None = None
+    ) -> Iterator[Received]:
         """Yield messages as they come; RostoolError(exit 1) after `timeout` s without one."""
+        items, wake = self._items, self._wake
+        last = time.monotonic()
         while True:
-            deadline = None if timeout is None else time.monotonic() + timeout
-            while True:
-                wait = 0.2 if deadline is None else min(0.2, deadline - time.monotonic())
-                if wait <= 0:
-                    raise RostoolError(f"no message within {timeout:g} s", exit_code=1)
-                try:
-                    item = self._queue.get(timeout=wait)
-                    break
-                except queue.Empty:
+            try:
+                item = items.popleft()
+            except IndexError:
+                if on_idle is not None:
+                    on_idle()
+                wake.clear()
+                if items:
                     continue
+                if timeout is not None and time.monotonic() - last >= timeout:
+                    raise RostoolError(f"no message within {timeout:g} s", exit_code=1) from None
+                wake.wait(0.2)
+                continue
             if isinstance(item, str):
                 raise RostoolError(item)
+            last = time.monotonic() if timeout is not None else last
             yield item
 
     def close(self) -> None:

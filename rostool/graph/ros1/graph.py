@@ -116,18 +116,25 @@ class Ros1Graph:
     ) -> Subscription:
         resolved = resolve(topic)
         registry = self.types
+        decoders: dict[int, Callable[[bytes], Any]] = {}
 
-        def deliver(payload: bytes, link: InboundLink) -> None:
+        def decoder_for(link: InboundLink) -> Callable[[bytes], Any]:
             header = link.header
-            type_name = header.get("type", "*")
 
-            def decode() -> Any:
+            def decode(payload: bytes) -> Any:
                 msg_type = registry.resolve(
-                    type_name, header.get("md5sum", "*"), header.get("message_definition")
+                    header.get("type", "*"), header.get("md5sum", "*"), header.get("message_definition")
                 )
+                decoders[link.id] = msg_type.deserialize
                 return msg_type.deserialize(payload)
 
-            on_message(Received(resolved, payload, time.time_ns(), type_name, decode))
+            return decode
+
+        clock = time.time_ns
+
+        def deliver(payload: bytes, link: InboundLink) -> None:
+            decoder = decoders.get(link.id) or decoders.setdefault(link.id, decoder_for(link))
+            on_message(Received(resolved, payload, clock(), link.header.get("type", "*"), decoder))
 
         return self.node.subscribe(resolved, deliver, on_error=on_error)
 

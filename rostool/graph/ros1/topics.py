@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 
 from rostool.errors import RostoolError
 from rostool.graph.ros1 import tcpros
-from rostool.graph.ros1.master_client import call
+from rostool.graph.ros1.master_client import Unreachable, call
 from rostool.interfaces.ros1 import Ros1Type
 
 _connection_ids = itertools.count(1)
@@ -156,8 +156,10 @@ class InboundLink:
             read_frame = tcpros.read_frame
             while not self._closed:
                 callback(read_frame(stream), self)
-        except (tcpros.ConnectionClosed, OSError, RostoolError) as err:
-            if not self._closed and isinstance(err, RostoolError):
+        except (tcpros.ConnectionClosed, OSError, Unreachable):
+            pass  # a publisher that died or left: the master's publisherUpdate tidies up, as in rospy
+        except RostoolError as err:
+            if not self._closed:
                 sub.report_error(str(err))
         finally:
             self.connected = False

@@ -1,0 +1,124 @@
+"""Shared pieces of the live-graph benchmarks: a loopback master, a counted publisher, process timing."""
+
+from __future__ import annotations
+
+import os
+import socket
+import subprocess
+import sys
+import time
+from collections.abc import Sequence
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+VENV_PYTHON = str(ROOT / ".venv" / "bin" / "python")
+
+
+def free_port() -> int:
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return int(sock.getsockname()[1])
+
+
+def loopback_env(port: int) -> dict[str, str]:
+    env = {k: v for k, v in os.environ.items() if not k.startswith("ROS") and k != "PYTHONPATH"}
+    env.update(ROS_MASTER_URI=f"http://127.0.0.1:{port}", ROS_HOSTNAME="127.0.0.1", PYTHONUNBUFFERED="1")
+    env["ROS_HOME"] = env["ROS_LOG_DIR"] = "/tmp/rostool-bench-ros"
+    return env
+
+
+def debian_env(env: dict[str, str]) -> dict[str, str]:
+    clean = {k: v for k, v in env.items() if k not in ("VIRTUAL_ENV", "PYTHONHOME")}
+    clean["PATH"] = "/usr/bin:/bin"
+    return clean
+
+
+def start_master(env: dict[str, str]) -> subprocess.Popen[bytes]:
+    port = env["ROS_MASTER_URI"].rsplit(":", 1)[1]
+    proc = subprocess.Popen(["rosmaster", "--core", "-p", port], env=debian_env(env),
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)  # fmt: skip
+    deadline = time.monotonic() + 15
+    while time.monotonic() < deadline:
+        try:
+            socket.create_connection(("127.0.0.1", int(port)), timeout=0.2).close()
+            return proc
+        except OSError:
+            time.sleep(0.05)
+    raise SystemExit("rosmaster did not start")
+
+
+# Publishes exactly COUNT messages of TYPE (Int32 counting up, else a fixed sample) at RATE (0: as fast
+# as possible) once SUBS subscribers are connected, then prints "sent N in S seconds". Uses rostool's own
+# client, so the count is exact.
+PUBLISHER = r"""
+import sys, time, struct
+from rostool.graph.ros1.node import Node
+from rostool.interfaces.ros1 import TypeRegistry
+count, rate, subs, type_name = int(sys.argv[1]), float(sys.argv[2]), int(sys.argv[3]), sys.argv[4]
+msg_type = TypeRegistry().builtin(type_name)
+if type_name != "std_msgs/Int32":
+    from rostool.interfaces.fill import build_message
+    sample = build_message(msg_type.store, msg_type.store_name, {
+        "header": {"seq": 7, "stamp": {"secs": 1700000000, "nsecs": 123456789}, "frame_id": "map"},
+        "pose": {"position": {"x": 1.5, "y": -2.25, "z": 0.1}, "orientation": {"w": 1.0}}})
+    fixed = msg_type.serialize(sample)
+with Node("bench_pub", anonymous=False) as node:
+    pub = node.advertise("/bench", msg_type)
+    if not pub.wait_for_subscribers(subs, 30):
+        sys.exit("subscribers did not connect")
+    time.sleep(1.0)
+    period = 1.0 / rate if rate else 0.0
+    start = time.perf_counter()
+    for i in range(count):
+        if period:
+            delay = start + i * period - time.perf_counter()
+            if delay > 0:
+                time.sleep(delay)
+        pub.publish_raw(struct.pack("<i", i) if type_name == "std_msgs/Int32" else fixed)
+    elapsed = time.perf_counter() - start
+    print(f"sent {count} in {elapsed:.6f} seconds", flush=True)
+    try:
+        time.sleep(3.0)
+    except KeyboardInterrupt:
+        pass
+"""
+
+
+def start_publisher(
+    env: dict[str, str], count: int, rate: float, subscribers: int, type_name: str = "std_msgs/Int32"
+) -> subprocess.Popen[str]:
+    args = [VENV_PYTHON, "-c", PUBLISHER, str(count), str(rate), str(subscribers), type_name]
+    return subprocess.Popen(args, env=env, stdout=subprocess.PIPE, text=True)
+
+
+def rostool_cmd(*args: str) -> list[str]:
+    return [VENV_PYTHON, "-m", "rostool", *args]
+
+
+def cpu_seconds(pid: int) -> float:
+    """User+system CPU a running process has used so far (from /proc)."""
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def median_wall(cmd: Sequence[str], env: dict[str, str], runs: int = 9) -> float:
+    times = []
+    for _ in range(runs):
+        start = time.perf_counter()
+        subprocess.run(list(cmd), env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, check=False)
+        times.append(time.perf_counter() - start)
+    return sorted(times)[len(times) // 2]
+
+
+def wait_subscribed(env: dict[str, str], topic: str, count: int, timeout: float = 20) -> None:
+    import xmlrpc.client
+
+    master = xmlrpc.client.ServerProxy(env["ROS_MASTER_URI"])
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        _code, _msg, (_pubs, subs, _srvs) = master.getSystemState("/bench")
+        nodes = next((n for t, n in subs if t == topic), [])
+        if len(nodes) >= count:
+            return
+        time.sleep(0.1)
+    sys.exit(f"only some subscribers of {topic} registered")
