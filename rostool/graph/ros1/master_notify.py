@@ -9,27 +9,17 @@ remaining callbacks is kept.
 from __future__ import annotations
 
 import contextlib
-import http.client
 import threading
 import xmlrpc.client
 from collections import OrderedDict
 from typing import Any
 
+from rostool.graph.ros1.master_client import server_proxy
+
 CALLER_ID = "/master"
 CALL_TIMEOUT = 15.0  # seconds; a node that does not answer in time misses that callback
 
 Task = tuple[str, str]  # (method, key): a newer task with the same pair supersedes a queued one
-
-
-class _TimeoutTransport(xmlrpc.client.Transport):
-    def __init__(self, timeout: float) -> None:
-        super().__init__()
-        self._timeout = timeout
-
-    def make_connection(self, host: Any) -> http.client.HTTPConnection:
-        connection = super().make_connection(host)
-        connection.timeout = self._timeout
-        return connection
 
 
 class Notifier:
@@ -66,7 +56,7 @@ class Notifier:
     def _drain(self, api: str) -> None:
         proxy: xmlrpc.client.ServerProxy | None = None
         with contextlib.suppress(OSError):  # not an http:// URI: its callbacks are dropped
-            proxy = xmlrpc.client.ServerProxy(api, transport=_TimeoutTransport(self._timeout))
+            proxy = server_proxy(api, self._timeout)
         try:
             while True:
                 with self._lock:
