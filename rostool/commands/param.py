@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -171,7 +172,7 @@ def load(ctx: click.Context, file: str, namespace: str) -> None:
     from rostool.graph.ros1.names import resolve
     from rostool.interfaces.values import parse_yaml
 
-    text = click.get_text_stream("stdin").read() if file == "-" else _read_text(file)
+    text = sys.stdin.read() if file == "-" else _read_text(file)
     value = parse_yaml(text, file)
     prefix = resolve(namespace)
     with live_graph(ctx) as graph:

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from rosbags.interfaces import Nodetype
 
@@ -14,17 +14,17 @@ if TYPE_CHECKING:
 _ROS1_TIME = {"builtin_interfaces/msg/Time": "time", "builtin_interfaces/msg/Duration": "duration"}
 
 
-def _type_text(kind: int, args: object) -> tuple[str, str | None]:
+def _type_text(kind: int, args: Any) -> tuple[str, str | None]:
     """(text of the field type, nested message type to expand or None)."""
     if kind == Nodetype.BASE:
-        name, bound = args  # type: ignore[misc]
+        name, bound = args
         return (f"string<={bound}" if name == "string" and bound else name), None
     if kind == Nodetype.NAME:
         nested = str(args)
         if nested in _ROS1_TIME:
             return _ROS1_TIME[nested], None
         return to_ros1_name(nested), nested
-    (sub_kind, sub_args), length = args  # type: ignore[misc]
+    (sub_kind, sub_args), length = args
     inner, nested_name = _type_text(sub_kind, sub_args)
     size = "" if not length else str(length) if kind == Nodetype.ARRAY else f"<={length}"
     return f"{inner}[{size}]", nested_name

@@ -80,8 +80,8 @@ def _build_time(cls: type, value: Any, path: str) -> Any:
         now = time.time_ns()
         return cls(sec=now // 1_000_000_000, nanosec=now % 1_000_000_000)
     if isinstance(value, dict):
-        sec = value.get("secs", value.get("sec", 0))
-        nsec = value.get("nsecs", value.get("nanosec", 0))
+        sec: Any = value.get("secs", value.get("sec", 0))
+        nsec: Any = value.get("nsecs", value.get("nanosec", 0))
         return cls(sec=int(sec), nanosec=int(nsec))
     if isinstance(value, (int, float)) and not isinstance(value, bool):
         ns = round(value * 1e9)

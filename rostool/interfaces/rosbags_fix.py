@@ -7,10 +7,12 @@ rosgraph_msgs/Log's DEBUG for fields, and echo would print them. Importing it fo
 
 from __future__ import annotations
 
+from typing import Any
+
 import rosbags.typesys.store as _rosbags_store
 
 
-def _generate_with_classvar(typs: object) -> str:
+def _generate_with_classvar(typs: Any) -> str:
     code: str = _original_generate(typs)
     future = "from __future__ import annotations\n"
     return code.replace(future, future + "from typing import ClassVar  # noqa: F401\n", 1)

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import dataclasses
-import functools
 from collections.abc import Iterator
 from typing import Any, Literal
 
@@ -16,14 +15,19 @@ def is_message(value: object) -> bool:
     return dataclasses.is_dataclass(value) and not isinstance(value, type)
 
 
-@functools.cache
+_FIELD_NAMES: dict[type, tuple[str, ...]] = {}
+
+
 def field_names(cls: type) -> tuple[str, ...]:
     """A message class's field names in definition order, without rosbags' bookkeeping fields."""
-    return tuple(
-        f.name
-        for f in dataclasses.fields(cls)
-        if f.name != "structure_needs_at_least_one_member" and not f.name.startswith("__")
-    )
+    names = _FIELD_NAMES.get(cls)
+    if names is None:
+        names = _FIELD_NAMES[cls] = tuple(
+            f.name
+            for f in dataclasses.fields(cls)
+            if f.name != "structure_needs_at_least_one_member" and not f.name.startswith("__")
+        )
+    return names
 
 
 def message_fields(msg: object) -> Iterator[tuple[str, Any]]:

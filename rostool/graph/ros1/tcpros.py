@@ -4,10 +4,14 @@ from __future__ import annotations
 
 import socket
 import struct
-from typing import BinaryIO
+from typing import Protocol
 
 _LENGTH = struct.Struct("<I")
 MAX_FRAME = 1 << 30
+
+
+class Readable(Protocol):
+    def read(self, size: int = -1, /) -> bytes | None: ...
 
 
 class ConnectionClosed(Exception):
@@ -34,21 +38,21 @@ def decode_header(body: bytes) -> dict[str, str]:
     return fields
 
 
-def read_exact(stream: BinaryIO, size: int) -> bytes:
+def read_exact(stream: Readable, size: int) -> bytes:
     data = stream.read(size)
     if data is None or len(data) < size:
         raise ConnectionClosed
     return data
 
 
-def read_frame(stream: BinaryIO) -> bytes:
+def read_frame(stream: Readable) -> bytes:
     (size,) = _LENGTH.unpack(read_exact(stream, 4))
     if size > MAX_FRAME:
         raise ConnectionClosed
     return read_exact(stream, size) if size else b""
 
 
-def read_header(stream: BinaryIO) -> dict[str, str]:
+def read_header(stream: Readable) -> dict[str, str]:
     return decode_header(read_frame(stream))
 
 
