@@ -74,3 +74,30 @@ while not rospy.is_shutdown():
     i += 1
     rate.sleep()
 """
+
+# A type no built-in store knows, generated at run time by genpy from its text (as rosbag does).
+CUSTOM_TYPE_PUBLISHER = """
+import rospy
+import genpy.dynamic
+text = '''# a sensor reading the book's W9 publishes
+float32 temperature
+float32 threshold
+string status
+int16[] history
+geometry_msgs/Point where
+================================================================================
+MSG: geometry_msgs/Point
+float64 x
+float64 y
+float64 z
+'''
+classes = genpy.dynamic.generate_dynamic('book_msgs/TemperatureStatus', text)
+Msg = classes['book_msgs/TemperatureStatus']
+rospy.init_node('temperature_publisher')
+pub = rospy.Publisher('temperature', Msg, queue_size=1, latch=True)
+msg = Msg(temperature=31.0, threshold=30.0, status='ALERT', history=[29, 30, 31])
+msg.where.x = 1.5
+pub.publish(msg)
+print(Msg._md5sum, flush=True)
+rospy.spin()
+"""

@@ -181,3 +181,29 @@ def test_our_publisher_survives_subscribers_coming_and_going(debian_master: dict
         _out, err = stop(pub)
     assert "Traceback" not in err
     time.sleep(0.2)
+
+
+def test_unknown_type_is_decoded_from_the_publishers_definition(
+    debian_master: dict[str, str], tmp_path: Path
+) -> None:
+    from tests.peers import CUSTOM_TYPE_PUBLISHER
+
+    env = debian_master
+    pub = start_rospy_script(CUSTOM_TYPE_PUBLISHER, env, tmp_path, "custom")
+    try:
+        assert pub.stdout is not None
+        md5 = pub.stdout.readline().strip()
+        _wait_topic(env, "/temperature")
+        assert rostool(["topic", "type", "/temperature"], env).stdout == "book_msgs/TemperatureStatus\n"
+        ours = rostool(["topic", "echo", "/temperature", "-n", "1"], env).stdout
+        assert ours == (
+            'temperature: 31.0\nthreshold: 30.0\nstatus: "ALERT"\nhistory: [29, 30, 31]\n'
+            "where: \n  x: 1.5\n  y: 0.0\n  z: 0.0\n---\n"
+        )
+        as_json = json.loads(rostool(["topic", "echo", "/temperature", "-n", "1", "--json"], env).stdout)
+        assert as_json["history"] == [29, 30, 31] and as_json["where"]["x"] == 1.5
+        # rostopic needs the type's package installed and cannot print it at all
+        assert debian(["rostopic", "echo", "-n", "1", "/temperature"], env, timeout=20).stdout == ""
+        assert len(md5) == 32
+    finally:
+        stop(pub)
