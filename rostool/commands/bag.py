@@ -8,12 +8,15 @@ from __future__ import annotations
 
 import sys
 from collections.abc import Callable, Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import click
 
 from rostool.bag.typestores import DEFAULT_DISTRO, DISTROS
 from rostool.errors import RostoolError
+
+if TYPE_CHECKING:
+    from rostool.graph.ros1.graph import Ros1Graph
 
 CONTEXT = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
 TIME_HELP = "seconds since the epoch, or +S for S seconds after the bag's first message"
@@ -124,6 +127,7 @@ def echo(
     """
     from rostool.bag.convert import parse_time
     from rostool.bag.reader import BagReader
+    from rostool.output.echo import EchoRenderer
 
     if as_json and as_csv:
         raise RostoolError("choose one of --json and --csv")
@@ -133,13 +137,12 @@ def echo(
         several = len(names) > 1
         if as_csv and several and not fields:
             raise RostoolError("--csv prints one topic: name it (e.g. `rostool bag echo BAG /topic --csv`)")
-        render = _Renderer(
+        render = EchoRenderer(
+            "json" if as_json else "csv" if as_csv else "yaml",
+            fields,
+            noarr,
+            nostr,
             style="ros1" if reader.ros_version == 1 else "ros2",
-            as_json=as_json,
-            as_csv=as_csv,
-            fields=fields,
-            noarr=noarr,
-            nostr=nostr,
             several=several,
         )
         keep = _echo_filter(expr)
@@ -150,7 +153,7 @@ def echo(
             msg = reader.deserialize(data, conn)
             if keep is not None and not keep(msg, conn.topic, timestamp):
                 continue
-            write(render(msg, conn.topic, timestamp))
+            write(render.render(msg, timestamp, conn.topic) + "\n")
             printed += 1
             if count is not None and printed >= count:
                 break
@@ -168,86 +171,6 @@ def _echo_filter(expr: str | None) -> Callable[[object, str, int], bool] | None:
         return predicate(Bindings(msg, {"topic": topic, "t": timestamp / 1e9}))
 
     return keep
-
-
-class _Renderer:
-    """One message -> the text to print (YAML + `---`, a JSON line or a CSV row)."""
-
-    def __init__(
-        self,
-        style: Any,
-        as_json: bool,
-        as_csv: bool,
-        fields: Sequence[str],
-        noarr: bool,
-        nostr: bool,
-        several: bool,
-    ) -> None:
-        from rostool.output.csv_text import CsvWriter
-
-        self.style = style
-        self.as_json = as_json
-        self.as_csv = as_csv
-        self.fields = list(fields)
-        self.noarr, self.nostr = noarr, nostr
-        self.several = several
-        self.csv: dict[str, CsvWriter] = {}
-
-    def _select(self, msg: object) -> object:
-        from rostool.output.plain import select_field
-
-        try:
-            if len(self.fields) == 1:
-                return select_field(msg, self.fields[0])
-            return {name: select_field(msg, name) for name in self.fields}
-        except LookupError as err:
-            raise RostoolError(str(err.args[0]) if err.args else str(err)) from err
-
-    def __call__(self, msg: object, topic: str, timestamp: int) -> str:
-        from rostool.output.plain import elide
-
-        if self.noarr or self.nostr:
-            msg = elide(msg, self.noarr, self.nostr)
-        value = self._select(msg) if self.fields else msg
-        if self.as_json:
-            return self._json(value, topic, timestamp)
-        if self.as_csv:
-            from rostool.output.csv_text import CsvWriter
-
-            writer = self.csv.setdefault(topic, CsvWriter())
-            return writer.row(value, timestamp) + "\n"
-        text = self._yaml(value)
-        if self.several:
-            return f"# {topic} @ {timestamp // 1_000_000_000}.{timestamp % 1_000_000_000:09d}\n{text}\n---\n"
-        return f"{text}\n---\n"
-
-    def _yaml(self, value: object) -> str:
-        from rostool.output.yaml_text import to_yaml, value_to_yaml
-
-        if not self.fields:
-            return to_yaml(value, self.style)
-        if len(self.fields) == 1:
-            return value_to_yaml(value, self.style)
-        assert isinstance(value, dict)
-        lines = []
-        for name, item in value.items():
-            text = value_to_yaml(item, self.style)
-            if "\n" in text:
-                text = "\n" + "\n".join("  " + line for line in text.splitlines())
-            lines.append(f"{name}: {text}")
-        return "\n".join(lines)
-
-    def _json(self, value: object, topic: str, timestamp: int) -> str:
-        from rostool.output.json_text import dumps
-        from rostool.output.plain import to_plain
-
-        if isinstance(value, dict) and self.fields:
-            plain: Any = {name: to_plain(item, self.style) for name, item in value.items()}
-        else:
-            plain = to_plain(value, self.style)
-        if self.several:
-            plain = {"topic": topic, "t": timestamp / 1e9, "msg": plain}
-        return dumps(plain) + "\n"
 
 
 # -- convert / filter ----------------------------------------------------------------------------
@@ -370,3 +293,290 @@ def reindex(files: tuple[str, ...]) -> None:
         click.echo(
             f"{result.path}: {result.messages} messages indexed{extra}; original kept as {result.backup}"
         )
+
+
+# -- play ----------------------------------------------------------------------------------------
+@bag.command(context_settings=CONTEXT)
+@click.argument("args", nargs=-1, required=True, metavar="BAG... [FROM:=TO]...")
+@click.option("-l", "--loop", is_flag=True, help="Start over at the end, until Ctrl+C.")
+@click.option(
+    "-r", "--rate", type=click.FloatRange(min=0, min_open=True), default=1.0, show_default=True,
+    help="Speed factor (2 = twice as fast).",
+)  # fmt: skip
+@click.option("-s", "--start", type=click.FloatRange(min=0), default=0.0, metavar="S",
+              help="Start S seconds into the bag.")  # fmt: skip
+@click.option("-u", "--duration", type=click.FloatRange(min=0, min_open=True), metavar="U",
+              help="Play only U seconds of bag time.")  # fmt: skip
+@click.option(
+    "--topics", multiple=True, metavar="T", help="Only these topics (repeatable, or comma-separated)."
+)
+@click.option("--clock", is_flag=True, help="Publish the bag time on /clock (rosgraph_msgs/Clock).")
+@click.option("--hz", type=click.FloatRange(min=0, min_open=True), default=100.0, show_default=True,
+              help="Rate of /clock messages with --clock.")  # fmt: skip
+@click.option("-d", "--delay", type=click.FloatRange(min=0), default=0.2, show_default=True, metavar="S",
+              help="Wait S seconds after advertising, so subscribers can connect.")  # fmt: skip
+@click.option("--wait-for-subscribers", is_flag=True, help="Wait for a subscriber on every topic first.")
+@click.option("--pause", is_flag=True, help="Start paused (space resumes; needs a terminal).")
+@click.option("-i", "--immediate", is_flag=True, help="Publish all messages without waiting.")
+@click.option("-k", "--keep-alive", is_flag=True, help="Keep the (latched) publishers alive at the end.")
+@click.option("--remap", multiple=True, metavar="FROM:=TO", help="Publish topic FROM as TO (repeatable).")
+@click.option("-q", "--quiet", is_flag=True, help="No status line and no messages on stderr.")
+@distro_option
+@click.pass_context
+def play(
+    ctx: click.Context,
+    args: tuple[str, ...],
+    loop: bool,
+    rate: float,
+    start: float,
+    duration: float | None,
+    topics: tuple[str, ...],
+    clock: bool,
+    hz: float,
+    delay: float,
+    wait_for_subscribers: bool,
+    pause: bool,
+    immediate: bool,
+    keep_alive: bool,
+    remap: tuple[str, ...],
+    quiet: bool,
+    distro: str,
+) -> None:
+    """Publish the messages of bags into the live ROS 1 graph, on their recorded schedule.
+
+    ROS 1 bags are published byte for byte with their stored types (latched where recorded so). ROS 2
+    bags (.mcap, .db3, rosbag2 directories) are converted to ROS 1 (`pkg/msg/T` -> `pkg/T`); topics whose
+    type has no ROS 1 equivalent are skipped with a warning. On a terminal, a status line shows the bag
+    time and space pauses/resumes ('s' steps while paused). Remappings may also be given as arguments
+    (`/chatter:=/talk`), and with --topics, further topic names after the bags.
+
+    \b
+    Examples:
+      rostool bag play run.bag
+      rostool bag play -r 2 -s 10 -u 5 run.bag --topics /odom,/tf
+      rostool bag play -l --clock run.bag /scan:=/scan_raw
+      rostool bag play talker.mcap
+    """
+    from rostool.bag.play import Console, Player, PlayOptions, parse_remaps
+    from rostool.bag.reader import BagReader
+    from rostool.commands._common import live_graph
+
+    paths, remap_args, extra_topics = _play_arguments(args, bool(topics))
+    _require_ros1(ctx)
+    options = PlayOptions(
+        rate=rate,
+        start=start,
+        duration=duration,
+        loop=loop,
+        topics=[*_topic_list(topics), *extra_topics],
+        clock=clock,
+        hz=hz,
+        delay=delay,
+        remap=parse_remaps([*remap_args, *remap]),
+        keep_alive=keep_alive,
+        wait_for_subscribers=wait_for_subscribers,
+        pause=pause,
+        immediate=immediate,
+    )
+    warn = (lambda text: None) if quiet else (lambda text: click.echo(f"rostool: warning: {text}", err=True))
+    with BagReader(paths, distro) as reader, live_graph(ctx) as graph:
+        console = Console.detect(quiet)
+        if pause and not console.keyboard:
+            raise RostoolError("--pause needs a terminal on stdin to resume with space")
+        player = Player(reader, _ros1(graph), options, console, warn)
+        with console:
+            player.advertise()
+            result = player.run()
+            console.say("Done.")
+    if result.published == 0 and not quiet:
+        click.echo("rostool: warning: no message was played (check -s/-u and --topics)", err=True)
+
+
+def _play_arguments(args: Sequence[str], with_topics: bool) -> tuple[list[str], list[str], list[str]]:
+    """Split play's arguments into bags, `FROM:=TO` remappings and (after --topics) topic names."""
+    from pathlib import Path
+
+    paths, remaps, topics = [], [], []
+    for arg in args:
+        if ":=" in arg:
+            remaps.append(arg)
+        elif with_topics and paths and arg.startswith("/") and not Path(arg).exists() and "." not in arg:
+            topics.append(arg)  # `rosbag play x.bag --topics /a /b`: /b ends up here
+        else:
+            paths.append(arg)
+    if not paths:
+        raise RostoolError("give at least one bag to play")
+    return paths, remaps, topics
+
+
+_NEEDS_ROS1 = (
+    "bag play and bag record work with a ROS 1 graph only for now: point ROS_MASTER_URI at a ROS 1 "
+    "master (or pass --ros1)"
+)
+
+
+def _require_ros1(ctx: click.Context) -> None:
+    """Before opening anything: a ROS 2 graph (chosen or detected) is not what play/record talk to."""
+    from rostool.commands._common import ros_version
+    from rostool.graph import select_ros_version
+
+    if select_ros_version(ros_version(ctx)) != 1:
+        raise RostoolError(_NEEDS_ROS1)
+
+
+def _ros1(graph: object) -> Ros1Graph:
+    from rostool.graph.ros1.graph import Ros1Graph
+
+    if not isinstance(graph, Ros1Graph):
+        raise RostoolError(_NEEDS_ROS1)
+    return graph
+
+
+# -- record --------------------------------------------------------------------------------------
+def _parse_duration(text: str | None) -> float | None:
+    """rosbag's durations: 30, 30s, 5m, 1.5h."""
+    if text is None:
+        return None
+    value = text.strip().lower()
+    scale = {"s": 1.0, "m": 60.0, "h": 3600.0}.get(value[-1:])
+    try:
+        seconds = float(value[:-1] if scale else value) * (scale or 1.0)
+    except ValueError as err:
+        raise RostoolError(f"--duration {text!r}: expected seconds, or a number with s, m or h") from err
+    if seconds <= 0:
+        raise RostoolError(f"--duration {text!r}: must be positive")
+    return seconds
+
+
+@bag.command(context_settings=CONTEXT)
+@click.argument("topics", nargs=-1, metavar="[TOPIC]...")
+@click.option("-a", "--all", "all_topics", is_flag=True, help="Record every published topic (also new ones).")
+@click.option("-e", "--regex", is_flag=True, help="TOPICs are regular expressions (matching whole names).")
+@click.option("-x", "--exclude", metavar="RE", help="Leave out topics matching RE.")
+@click.option("-O", "--output-name", metavar="NAME", help="Write exactly NAME (.bag added if missing).")
+@click.option("-o", "--output-prefix", metavar="PREFIX", help="Write PREFIX_YYYY-MM-DD-HH-MM-SS.bag.")
+@click.option("--duration", metavar="D", help="Stop after D (30, 30s, 5m, 1h); with --split: per file.")
+@click.option("--size", type=click.FloatRange(min=0, min_open=True), metavar="MB",
+              help="Stop at MB megabytes; with --split: per file.")  # fmt: skip
+@click.option("--split", is_flag=True, help="Start a new file (NAME_0, NAME_1, ...) at --size or --duration.")
+@click.option("--format", "fmt", type=click.Choice(["bag", "mcap", "db3"]),
+              help="Output format (default: from -O/-o's suffix, else .bag).")  # fmt: skip
+@click.option("-b", "--buffsize", type=click.IntRange(min=1), default=256, show_default=True, metavar="MB",
+              help="Messages waiting for the disk; beyond it they are dropped (and counted).")  # fmt: skip
+@click.option("--lz4", "compression", flag_value="lz4", help="Compress .bag chunks with lz4.")
+@click.option("-j", "--bz2", "compression", flag_value="bz2", help="Compress .bag chunks with bz2.")
+@click.option("-q", "--quiet", is_flag=True, help="No progress and no summary on stderr.")
+@click.option("--force", is_flag=True, help="Overwrite an existing output file.")
+@click.pass_context
+def record(
+    ctx: click.Context,
+    topics: tuple[str, ...],
+    all_topics: bool,
+    regex: bool,
+    exclude: str | None,
+    output_name: str | None,
+    output_prefix: str | None,
+    duration: str | None,
+    size: float | None,
+    split: bool,
+    fmt: Any,
+    buffsize: int,
+    compression: str | None,
+    quiet: bool,
+    force: bool,
+) -> None:
+    """Record topics of the live ROS 1 graph into a bag, until Ctrl+C (or --duration / --size).
+
+    Messages are stored as received, with their publisher's type and definition and the receive time.
+    The bag is written as NAME.bag.active and renamed when recording ends; Ctrl+C and SIGTERM always
+    leave a complete, indexed bag (exit 0). After a crash or `kill -9`, `rostool bag reindex
+    NAME.bag.active` recovers all but the last 0.1 s. .mcap/.db3 outputs are ROS 2 bags (types
+    converted to pkg/msg/T). With -a or -e, topics that appear later are recorded too.
+
+    \b
+    Examples:
+      rostool bag record -a -O test.bag
+      rostool bag record /odom /tf -o run             # run_2024-05-01-12-00-00.bag
+      rostool bag record -e '/camera/.*' -x '.*compressed.*' --split --size 1024
+      rostool bag record -a --duration 30s --format mcap
+    """
+    import threading
+
+    from rostool.bag.record import Recorder, RecordOptions, stop_on_signals
+    from rostool.commands._common import live_graph
+
+    if output_name and output_prefix:
+        raise RostoolError("choose one of -O (exact name) and -o (prefix)")
+    _require_ros1(ctx)
+    if regex and not topics:
+        raise RostoolError("-e needs at least one regular expression (e.g. `-e '/camera/.*'`)")
+    options = RecordOptions(
+        topics=topics,
+        all_topics=all_topics,
+        regex=regex,
+        exclude=exclude,
+        output_name=output_name,
+        output_prefix=output_prefix,
+        fmt=fmt,
+        duration=_parse_duration(duration),
+        size=None if size is None else int(size * 1024 * 1024),
+        split=split,
+        buffer_bytes=buffsize * 1024 * 1024,
+        compression=compression or "none",
+        force=force,
+    )
+    if compression and options.fmt not in (None, "bag"):
+        raise RostoolError("--lz4/--bz2 compress ROS 1 .bag chunks; leave them out with --format mcap/db3")
+    progress = None if quiet or not sys.stderr.isatty() else _RecordProgress()
+    stop = threading.Event()
+    with live_graph(ctx) as graph:
+        recorder = Recorder(_ros1(graph), options)
+        with stop_on_signals(stop):
+            try:
+                result = recorder.run(stop, progress)
+            finally:
+                if progress is not None:
+                    progress.end()
+    for topic, count in sorted(result.dropped.items()):
+        click.echo(
+            f"rostool: warning: dropped {count} messages on {topic}: the disk could not keep up "
+            "(raise -b/--buffsize)",
+            err=True,
+        )
+    for topic, why in sorted(result.skipped.items()):
+        click.echo(f"rostool: warning: some messages on {topic} were not written: {why}", err=True)
+    if result.error is not None:
+        kept = f"; what was recorded before is in {', '.join(map(str, result.files))}" if result.files else ""
+        raise RostoolError(f"recording stopped: {result.error}{kept}")
+    if not quiet:
+        names = ", ".join(str(path) for path in result.files)
+        topics = len(result.counts)
+        click.echo(
+            f"recorded {result.messages} messages on {topics} topic{'' if topics == 1 else 's'} to {names}",
+            err=True,
+        )
+
+
+class _RecordProgress:
+    """One status line on stderr, rewritten in place."""
+
+    def __init__(self) -> None:
+        self._last = 0.0
+        self._shown = False
+
+    def __call__(self, status: Any) -> None:
+        from rostool.graph.rates import format_bytes
+
+        dropped = f", {status.dropped} dropped" if status.dropped else ""
+        sys.stderr.write(
+            f"\r recording {status.path}: {status.messages} msgs on {status.topics} "
+            f"topic{'' if status.topics == 1 else 's'}, "
+            f"{format_bytes(status.bytes)}{dropped}    "
+        )
+        sys.stderr.flush()
+        self._shown = True
+
+    def end(self) -> None:
+        if self._shown:
+            sys.stderr.write("\n")
+            sys.stderr.flush()

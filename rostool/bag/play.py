@@ -1,0 +1,369 @@
+"""`bag play`: publish the messages of bags into the live ROS 1 graph on their recorded schedule.
+
+ROS 1 bags are published byte for byte, with the type name, md5sum and definition stored in the bag and
+latched when the recording publisher was. ROS 2 bags (.mcap, .db3, rosbag2 directories) are converted
+from CDR to ROS 1 bytes (rosbags' `cdr_to_ros1`) and published with the built-in ROS 1 type of the same
+name (`pkg/msg/T` -> `pkg/T`); the first message of each topic is checked against the ROS 1 type. Topics
+whose type has no ROS 1 equivalent (e.g. rcl_interfaces/msg/Log) are skipped with a warning; when no
+topic is left, that is an error.
+
+Timing: see `schedule.py` (absolute due times, no drift). The playback origin is the first message played
+(after -s), as rosbag's view begins at its first message: a pass never starts with a dead wait.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import select
+import struct
+import sys
+import time
+from collections.abc import Callable, Collection, Iterator, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any, TextIO
+
+from rosbags.interfaces import Connection, ConnectionExtRosbag1, ConnectionExtRosbag2
+
+from rostool.bag.reader import BagReader
+from rostool.bag.schedule import PlayClock, sleep_until
+from rostool.errors import RostoolError
+from rostool.graph.ros1.graph import Ros1Graph
+from rostool.graph.ros1.names import resolve
+from rostool.graph.ros1.topics import Publisher
+from rostool.interfaces.names import to_ros1_name
+from rostool.interfaces.ros1 import Ros1Type, builtin_store
+
+_CLOCK = struct.Struct("<II")
+UI_INTERVAL = 0.05  # keyboard polling and status line refresh, seconds
+
+
+@dataclass
+class PlayOptions:
+    rate: float = 1.0
+    start: float = 0.0  # seconds into the bag
+    duration: float | None = None  # seconds of bag time
+    loop: bool = False
+    topics: Sequence[str] = ()
+    clock: bool = False
+    hz: float = 100.0
+    delay: float = 0.2  # seconds between advertising and the first message
+    remap: Mapping[str, str] = field(default_factory=dict)
+    keep_alive: bool = False
+    wait_for_subscribers: bool = False
+    pause: bool = False  # start paused (space resumes)
+    immediate: bool = False  # no waiting between messages
+
+
+@dataclass
+class PlayResult:
+    published: int = 0
+    loops: int = 0
+    skipped: dict[str, str] = field(default_factory=dict)  # topic -> why
+
+
+@dataclass
+class _Plan:
+    topic: str  # where it is published (after remapping)
+    publisher: Publisher
+    convert: Callable[[Any], Any] | None  # CDR -> ROS 1 bytes for ROS 2 bags
+    checked: bool = True  # the first converted message has been decoded with the ROS 1 type
+
+
+def parse_remaps(values: Collection[str]) -> dict[str, str]:
+    """`/from:=/to` pairs (rosbag and ROS remapping syntax) with resolved names."""
+    remaps = {}
+    for value in values:
+        source, sep, target = value.partition(":=")
+        if not sep or not source or not target:
+            raise RostoolError(f"bad remapping {value!r}: expected FROM:=TO, e.g. /chatter:=/talk")
+        remaps[resolve(source)] = resolve(target)
+    return remaps
+
+
+class Console:
+    """The terminal side of playback: rosbag's status line on stderr and space/s keys on stdin.
+
+    The status line needs stderr to be a terminal; the keys need stdin to be the controlling terminal of a
+    foreground process (else changing its mode would stop us with SIGTTOU). Terminal settings are always
+    restored, Ctrl+C included."""
+
+    def __init__(self, status: bool, keyboard: bool, err: TextIO | None = None) -> None:
+        self.err = err or sys.stderr
+        self.show_status = status
+        self.keyboard = keyboard
+        self._saved: Any = None
+        self._fd = -1
+        self._shown = False
+
+    @classmethod
+    def detect(cls, quiet: bool) -> Console:
+        status = not quiet and sys.stderr.isatty()
+        keyboard = False
+        with contextlib.suppress(OSError, ValueError, AttributeError):
+            fd = sys.stdin.fileno()
+            keyboard = os.isatty(fd) and os.tcgetpgrp(fd) == os.getpgrp()
+        return cls(status, keyboard)
+
+    def __enter__(self) -> Console:
+        if self.keyboard:
+            import termios
+            import tty
+
+            try:
+                self._fd = sys.stdin.fileno()
+                self._saved = termios.tcgetattr(self._fd)
+                tty.setcbreak(self._fd)
+            except (OSError, termios.error):
+                self.keyboard = False
+        return self
+
+    def __exit__(self, *_exc: object) -> None:
+        if self._saved is not None:
+            import termios
+
+            with contextlib.suppress(OSError, termios.error):
+                termios.tcsetattr(self._fd, termios.TCSADRAIN, self._saved)
+            self._saved = None
+        if self._shown:
+            self.err.write("\n")
+            self.err.flush()
+            self._shown = False
+
+    def read_keys(self) -> str:
+        if not self.keyboard:
+            return ""
+        ready, _w, _x = select.select([self._fd], [], [], 0)
+        if not ready:
+            return ""
+        return os.read(self._fd, 64).decode(errors="replace")
+
+    def status(self, state: str, bag_time: float, elapsed: float, total: float) -> None:
+        if not self.show_status:
+            return
+        line = f" [{state}]  Bag Time: {bag_time:13.6f}   Duration: {elapsed:.6f} / {total:.6f}"
+        self.err.write(f"\r{line}               \r")
+        self.err.flush()
+        self._shown = True
+
+    def say(self, text: str) -> None:
+        if self.show_status:
+            if self._shown:
+                self.err.write("\n")
+                self._shown = False
+            self.err.write(text + "\n")
+            self.err.flush()
+
+
+class Player:
+    def __init__(
+        self,
+        reader: BagReader,
+        graph: Ros1Graph,
+        options: PlayOptions,
+        console: Console | None = None,
+        warn: Callable[[str], None] | None = None,
+    ) -> None:
+        self.reader = reader
+        self.graph = graph
+        self.types = graph.types
+        self.options = options
+        self.console = console or Console(False, False)
+        self.warn = warn or (lambda text: None)
+        self.clock = PlayClock(options.rate)
+        self.result = PlayResult()
+        self._plans: dict[int, _Plan] = {}
+        self._publishers: dict[str, tuple[Publisher, str]] = {}  # topic -> (publisher, md5)
+        self._clock_pub: Publisher | None = None
+        self._next_tick = 0.0
+        self._next_ui = 0.0
+        self._step = False
+        self._started = False
+        self.total = (reader.end_ns - reader.start_ns) / 1e9 if reader.message_count else 0.0
+        self.window = self._window()
+        self.connections = reader.select([resolve(t) for t in options.topics])
+
+    def _window(self) -> tuple[int, int | None]:
+        start = self.reader.start_ns + round(self.options.start * 1e9)
+        end = None if self.options.duration is None else start + round(self.options.duration * 1e9)
+        return start, end
+
+    # -- advertising -----------------------------------------------------------------------------
+    def advertise(self) -> None:
+        """One publisher per topic; skip (and warn about) what cannot be played in ROS 1."""
+        for conn in self.connections:
+            topic = self.options.remap.get(conn.topic, conn.topic)
+            try:
+                msg_type, convert, latch = self._type_of(conn)
+            except RostoolError as err:
+                self._skip(conn.topic, str(err), warn=False)
+                continue
+            existing = self._publishers.get(topic)
+            if existing is not None:
+                publisher, md5 = existing
+                if md5 != msg_type.md5sum:
+                    self._skip(conn.topic, f"a second type {msg_type.name} on {topic}", warn=False)
+                    continue
+            else:
+                publisher = self.graph.node.advertise(topic, msg_type, latch)
+                self._publishers[topic] = (publisher, msg_type.md5sum)
+            self._plans[id(conn)] = _Plan(topic, publisher, convert, checked=convert is None)
+        if not self._plans:
+            if self.result.skipped:
+                reasons = "; ".join(f"{t}: {why}" for t, why in sorted(self.result.skipped.items()))
+                raise RostoolError(f"nothing to play in ROS 1: {reasons}")
+            return
+        for topic, why in self.result.skipped.items():  # only now: no warning before that error
+            self.warn(f"skipping {topic}: {why}")
+        if self.options.clock:
+            self._clock_pub = self.graph.node.advertise("/clock", self.types.builtin("rosgraph_msgs/Clock"))
+
+    def _skip(self, topic: str, why: str, warn: bool = True) -> None:
+        if topic not in self.result.skipped:
+            self.result.skipped[topic] = why
+            if warn:
+                self.warn(f"skipping {topic}: {why}")
+
+    def _type_of(self, conn: Connection) -> tuple[Ros1Type, Callable[[Any], Any] | None, bool]:
+        name = to_ros1_name(conn.msgtype)
+        if isinstance(conn.ext, ConnectionExtRosbag1):
+            md5, definition = conn.digest, conn.msgdef.data
+            try:
+                store = self.types.resolve(name, md5, definition).store
+            except RostoolError:
+                store = builtin_store()  # raw bytes are published as stored; decoding is never needed
+            return Ros1Type(name, md5, definition, store), None, bool(conn.ext.latching)
+        if "/msg/" not in conn.msgtype or not self.types.has_builtin(name):
+            raise RostoolError(f"{conn.msgtype} has no ROS 1 equivalent")
+        resolver = self.reader.resolver
+        if conn.msgtype in resolver.unknown:
+            raise RostoolError(resolver.missing_message(conn.msgtype))
+        msgtype = conn.msgtype
+
+        def convert(raw: Any) -> Any:
+            return resolver.store.cdr_to_ros1(raw, msgtype)
+
+        latch = False
+        if isinstance(conn.ext, ConnectionExtRosbag2):
+            latch = any(q.durability.value == 1 for q in conn.ext.offered_qos_profiles)
+        return self.types.builtin(name), convert, latch
+
+    # -- playing ---------------------------------------------------------------------------------
+    def run(self) -> PlayResult:
+        if not self._plans:
+            return self.result
+        self._pause_before_start()
+        if self.options.pause:
+            self.clock.pause(time.perf_counter())
+        while True:
+            published = self._play_once()
+            self.result.loops += 1
+            if not self.options.loop or published == 0:
+                break
+        if self.options.keep_alive:
+            while True:
+                now = time.perf_counter()
+                self._ui(now)
+                self._tick_clock(now)
+                time.sleep(UI_INTERVAL)
+        return self.result
+
+    def _pause_before_start(self) -> None:
+        options = self.options
+        if options.delay > 0:
+            self.console.say(f"Waiting {options.delay:g} seconds after advertising topics...")
+            time.sleep(options.delay)
+        if options.wait_for_subscribers:
+            self.console.say("Waiting for a subscriber on every topic...")
+            for publisher, _md5 in self._publishers.values():
+                while not publisher.wait_for_subscribers(1, 0.1):
+                    pass
+        self.console.say("Hit space to toggle paused, or 's' to step." if self.console.keyboard else "")
+
+    def _messages(self) -> Iterator[tuple[_Plan, int, Any]]:
+        start, end = self.window
+        plans = self._plans
+        conns = [c for c in self.connections if id(c) in plans]
+        for conn, stamp, data in self.reader.messages(conns, start, end):
+            plan = plans[id(conn)]
+            if plan.convert is None:
+                yield plan, stamp, data
+                continue
+            try:
+                payload = plan.convert(data)
+                if not plan.checked:
+                    self.types.builtin(to_ros1_name(conn.msgtype)).deserialize(payload)
+                    plan.checked = True
+            except Exception:
+                if not plan.checked:
+                    self._skip(conn.topic, f"{conn.msgtype} is laid out differently in ROS 1")
+                    del plans[id(conn)]
+                continue
+            yield plan, stamp, payload
+
+    def _play_once(self) -> int:
+        published = 0
+        clock_pub = self._clock_pub
+        wait = self._wait
+        for plan, stamp, payload in self._messages():
+            if published == 0:
+                now = time.perf_counter()
+                self.clock.start(stamp, now)
+                self._next_tick = now
+                self._started = True
+            wait(stamp)
+            if clock_pub is not None:
+                clock_pub.publish_raw(_CLOCK.pack(*divmod(stamp, 1_000_000_000)))
+            plan.publisher.publish_raw(payload)
+            published += 1
+        self.result.published += published
+        return published
+
+    def _wait(self, stamp: int) -> None:
+        if self.options.immediate and not self.clock.paused:
+            return
+        clock = self.clock
+        clock_pub = self._clock_pub
+        while True:
+            now = time.perf_counter()
+            if now >= self._next_ui:
+                self._ui(now)
+                if self._step:
+                    self._step = False
+                    clock.start(stamp, now)  # stay paused, at this message's time
+                    return
+            due = clock.due(stamp)
+            if now >= due:
+                return
+            deadline = min(due, self._next_ui)
+            if clock_pub is not None:
+                if now >= self._next_tick:
+                    self._tick_clock(now)
+                deadline = min(deadline, self._next_tick)
+            sleep_until(deadline)
+
+    def _tick_clock(self, now: float) -> None:
+        publisher = self._clock_pub
+        if publisher is None or not self._started or now < self._next_tick:
+            return
+        publisher.publish_raw(_CLOCK.pack(*divmod(self.clock.bag_time(now), 1_000_000_000)))
+        period = 1.0 / self.options.hz
+        self._next_tick += period
+        if self._next_tick <= now:  # fell behind (paused terminal, slow subscriber): no burst
+            self._next_tick = now + period
+
+    def _ui(self, now: float) -> None:
+        self._next_ui = now + UI_INTERVAL
+        console = self.console
+        for key in console.read_keys():
+            if key == " ":
+                if self.clock.paused:
+                    self.clock.resume(now)
+                else:
+                    self.clock.pause(now)
+            elif key == "s" and self.clock.paused:
+                self._step = True
+        if console.show_status:
+            bag_ns = self.clock.bag_time(now) if self._started else self.window[0]
+            state = "PAUSED " if self.clock.paused else "RUNNING"
+            console.status(state, bag_ns / 1e9, (bag_ns - self.reader.start_ns) / 1e9, self.total)

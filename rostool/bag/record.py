@@ -1,0 +1,587 @@
+"""`bag record`: subscribe to ROS 1 topics and write what arrives into bags, as `rosbag record` does.
+
+Subscriptions are raw (md5 `*`): the bytes received are stored with the publisher's own type, md5sum and
+definition from its connection header, stamped with the receive time. Network threads only append to a
+byte-bounded queue; one writer thread empties it, so a slow disk never stalls a publisher (what does not
+fit is counted as dropped and reported). ROS 1 bags are written by `ros1_writer.BagWriter` under
+`NAME.bag.active` and renamed when closed; the data is pushed to the OS at least every 0.1 s, so after a
+SIGKILL `rostool bag reindex NAME.bag.active` recovers everything but that last fraction of a second.
+.mcap/.db3 outputs are ROS 2 bags (messages converted to CDR, types renamed `pkg/msg/T`), written by
+rosbags under the directory `NAME.active/` and moved into place when closed.
+"""
+
+from __future__ import annotations
+
+import collections
+import contextlib
+import os
+import re
+import shutil
+import signal
+import threading
+import time
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from types import FrameType
+from typing import Any, Literal, Protocol
+
+from rostool.bag.ros1_writer import BagWriter, WriteFailed
+from rostool.errors import RostoolError
+from rostool.graph.ros1.graph import Ros1Graph
+from rostool.graph.ros1.names import resolve
+from rostool.graph.ros1.topics import InboundLink
+from rostool.interfaces.ros1 import TypeRegistry
+
+Format = Literal["bag", "mcap", "db3"]
+SUFFIXES: dict[str, Format] = {".bag": "bag", ".mcap": "mcap", ".db3": "db3"}
+POLL_INTERVAL = 0.5  # how often the master is asked for new topics (-a, -e)
+FLUSH_INTERVAL = 0.1  # the most a SIGKILL can lose, in seconds of messages
+
+
+@dataclass
+class RecordOptions:
+    topics: Sequence[str] = ()
+    all_topics: bool = False
+    regex: bool = False  # TOPICS are regular expressions (rosbag's -e)
+    exclude: str | None = None
+    output_name: str | None = None  # -O: exact name (a trailing .bag is optional)
+    output_prefix: str | None = None  # -o: NAME_YYYY-MM-DD-HH-MM-SS.bag
+    fmt: Format | None = None
+    duration: float | None = None  # total, or per file with split
+    size: int | None = None  # bytes: stop, or per file with split
+    split: bool = False
+    buffer_bytes: int = 256 * 1024 * 1024
+    compression: str = "none"
+    force: bool = False
+
+
+@dataclass
+class RecordStatus:
+    path: Path  # the file being written (its .active name)
+    messages: int
+    bytes: int
+    topics: int
+    dropped: int
+
+
+@dataclass
+class RecordResult:
+    files: list[Path] = field(default_factory=list)
+    counts: dict[str, int] = field(default_factory=dict)
+    dropped: dict[str, int] = field(default_factory=dict)
+    skipped: dict[str, str] = field(default_factory=dict)  # topic -> why some messages were not written
+    error: str | None = None
+
+    @property
+    def messages(self) -> int:
+        return sum(self.counts.values())
+
+
+# -- names ---------------------------------------------------------------------------------------
+def output_format(options: RecordOptions) -> Format:
+    given = options.output_name or options.output_prefix or ""
+    by_name = SUFFIXES.get(Path(given).suffix.lower())
+    if options.fmt is not None:
+        if by_name is not None and by_name != options.fmt and options.output_name:
+            raise RostoolError(f"{given}: the name says {by_name} but --format says {options.fmt}")
+        return options.fmt
+    return by_name or "bag"
+
+
+def target_name(
+    options: RecordOptions, fmt: Format, split_index: int | None, now: float | None = None
+) -> Path:
+    """rosbag's names: PREFIX (without .bag), then _DATE unless -O, then _N when splitting, then .bag."""
+    suffix = f".{fmt}"
+    prefix = options.output_name if options.output_name is not None else options.output_prefix or ""
+    for strip in {".bag", suffix}:
+        if prefix.endswith(strip):
+            prefix = prefix[: -len(strip)]
+            break
+    parts = [prefix] if prefix else []
+    if options.output_name is None:
+        parts.append(time.strftime("%Y-%m-%d-%H-%M-%S", time.localtime(now)))
+    if split_index is not None:
+        parts.append(str(split_index))
+    if not parts:
+        raise RostoolError("the output name is empty; give -O NAME or -o PREFIX")
+    return Path("_".join(parts) + suffix)
+
+
+def active_name(path: Path) -> Path:
+    return path.with_name(path.name + ".active")
+
+
+def _check_target(path: Path, force: bool) -> None:
+    parent = path.parent
+    if not parent.exists():
+        raise RostoolError(f"{path}: cannot record: directory {parent} does not exist")
+    if not parent.is_dir():
+        raise RostoolError(f"{path}: cannot record: {parent} is not a directory")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise RostoolError(f"{path}: cannot record: directory {parent} is not writable")
+    for candidate in (path, active_name(path)):
+        if (candidate.exists() or candidate.is_symlink()) and not force:
+            raise RostoolError(f"{candidate} exists; pass --force to overwrite it")
+
+
+# -- sinks ---------------------------------------------------------------------------------------
+class Sink(Protocol):
+    final: Path
+    active: Path
+    problems: dict[str, str]  # topic -> why some of its messages were not written
+
+    @property
+    def size(self) -> int: ...
+
+    def write(self, key: object, header: Mapping[str, str], time_ns: int, payload: bytes) -> bool: ...
+
+    def flush(self) -> None: ...
+
+    def close(self) -> None: ...
+
+
+def _open_failure(path: Path, err: OSError) -> RostoolError:
+    reason = err.strerror or str(err)
+    return RostoolError(f"{path}: cannot create the bag: {reason}")
+
+
+class Ros1Sink:
+    """One ROS 1 bag: raw bytes with the publisher's connection header."""
+
+    def __init__(self, final: Path, compression: str, force: bool) -> None:
+        self.final = final
+        self.active = active_name(final)
+        if force:
+            with contextlib.suppress(FileNotFoundError, IsADirectoryError):
+                self.active.unlink()
+        try:
+            self.writer = BagWriter(self.active, compression)
+        except OSError as err:
+            raise _open_failure(self.active, err) from err
+        self._conns: dict[object, int] = {}
+        self.problems: dict[str, str] = {}
+
+    @property
+    def size(self) -> int:
+        return self.writer.size
+
+    def write(self, key: object, header: Mapping[str, str], time_ns: int, payload: bytes) -> bool:
+        conn = self._conns.get(key)
+        if conn is None:
+            conn = self._conns[key] = self.writer.connection(header)
+        self.writer.write(conn, time_ns, payload)
+        return True
+
+    def flush(self) -> None:
+        self.writer.flush()
+
+    def close(self) -> None:
+        try:
+            self.writer.close()
+        except WriteFailed as err:
+            raise RostoolError(
+                f"{self.active}: cannot finish the bag ({err}); recover it with "
+                f"`rostool bag reindex {self.active}`"
+            ) from err
+        os.replace(self.active, self.final)
+
+
+class Ros2Sink:
+    """One .mcap or .db3 file: messages converted to CDR with ROS 2 type names (rosbags' writer)."""
+
+    def __init__(self, final: Path, fmt: Format, types: TypeRegistry, force: bool) -> None:
+        from rosbags.rosbag2 import StoragePlugin
+        from rosbags.rosbag2 import Writer as Writer2
+
+        self.final = final
+        self.active = active_name(final)
+        self.fmt = fmt
+        self.types = types
+        if force and self.active.is_dir():
+            shutil.rmtree(self.active)
+        plugin = StoragePlugin.MCAP if fmt == "mcap" else StoragePlugin.SQLITE3
+        try:
+            self.writer: Any = Writer2(self.active, version=8, storage_plugin=plugin)
+            self.writer.open()
+        except OSError as err:
+            raise _open_failure(self.active, err) from err
+        except Exception as err:  # rosbags' WriterError
+            raise RostoolError(f"{self.active}: cannot create the bag: {err}") from err
+        self._conns: dict[object, tuple[Any, Callable[[bytes], Any]] | None] = {}
+        self.problems: dict[str, str] = {}
+        self._bytes = 0
+        self._chunk_started = time.monotonic()
+
+    @property
+    def size(self) -> int:
+        return self._bytes
+
+    def write(self, key: object, header: Mapping[str, str], time_ns: int, payload: bytes) -> bool:
+        if key not in self._conns:
+            self._conns[key] = self._add(header)
+        entry = self._conns[key]
+        if entry is None:
+            return False
+        conn, convert = entry
+        try:
+            data = convert(payload)
+        except Exception as err:  # bytes that do not match the publisher's own definition
+            self.problems.setdefault(header["topic"], f"cannot convert a {header['type']} message: {err}")
+            return False
+        self.writer.write(conn, time_ns, data)
+        self._bytes += len(data)
+        return True
+
+    def _add(self, header: Mapping[str, str]) -> tuple[Any, Callable[[bytes], Any]] | None:
+        from functools import partial
+
+        from rosbags.convert.converter import LATCH, STATIC_MSGTYPE_RENAMES
+
+        try:
+            msg_type = self.types.resolve(
+                header.get("type", ""), header.get("md5sum", "*"), header.get("message_definition")
+            )
+            msgtype = STATIC_MSGTYPE_RENAMES.get(msg_type.store_name, msg_type.store_name)
+            store = _ros2_store(msg_type.store, msg_type.store_name, msgtype)
+            qos = LATCH if header.get("latching") == "1" else []
+            conn = self.writer.add_connection(
+                header["topic"], msgtype, typestore=store, offered_qos_profiles=list(qos)
+            )
+        except Exception as err:  # a type rosbags cannot express in ROS 2
+            self.problems[header["topic"]] = f"cannot write {header.get('type')} to a ROS 2 bag: {err}"
+            return None
+        return conn, partial(store.ros1_to_cdr, typename=msgtype)
+
+    def flush(self) -> None:
+        storage = self.writer.storage
+        if storage is None:
+            return
+        if self.fmt == "mcap":
+            # Close the pending chunk now and then so a killed recorder leaves a reindexable file.
+            if storage.chunk.bio.tell() and time.monotonic() - self._chunk_started >= 1.0:
+                storage.close_chunk()
+                self._chunk_started = time.monotonic()
+            storage.bio.flush()
+        else:
+            storage.conn.commit()
+
+    def close(self) -> None:
+        try:
+            self.writer.close()
+        except OSError as err:
+            raise RostoolError(f"{self.active}: cannot finish the bag: {err.strerror or err}") from err
+        produced = self.active / f"{self.active.name}.{self.fmt}"
+        os.replace(produced, self.final)
+        shutil.rmtree(self.active, ignore_errors=True)
+
+
+def _ros2_store(src: Any, src_msgtype: str, dst_msgtype: str) -> Any:
+    """The ROS 1 types with ROS 2's std_msgs/Header (no `seq`), as rosbags' converter builds them."""
+    from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+
+    header = get_typestore(Stores.ROS2_FOXY).fielddefs["std_msgs/msg/Header"]
+    store = get_typestore(Stores.EMPTY)
+    store.register({**src.fielddefs, "std_msgs/msg/Header": header})
+    if dst_msgtype not in store.fielddefs:
+        text = src.generate_msgdef(src_msgtype, ros_version=2)[0]
+        typs = get_types_from_msg(text, dst_msgtype)
+        typs.pop("std_msgs/msg/Header", None)
+        store.register(typs)
+    return store
+
+
+# -- the queue between network threads and the writer --------------------------------------------
+class _Queue:
+    """Byte-bounded: a message that does not fit is dropped and counted (per topic)."""
+
+    def __init__(self, limit: int) -> None:
+        self.limit = limit
+        self.items: collections.deque[tuple[InboundLink, int, bytes]] = collections.deque()
+        self.bytes = 0
+        self.dropped: collections.Counter[str] = collections.Counter()
+        self.lock = threading.Lock()
+        self.ready = threading.Event()
+        self.accepting = True
+
+    def put(self, payload: bytes, link: InboundLink) -> None:
+        now = time.time_ns()
+        if not self.accepting:
+            return
+        size = len(payload)
+        with self.lock:
+            if self.bytes + size > self.limit:
+                self.dropped[link.subscription.topic] += 1
+                return
+            self.bytes += size
+        self.items.append((link, now, payload))
+        if not self.ready.is_set():
+            self.ready.set()
+
+    def take(self) -> list[tuple[InboundLink, int, bytes]]:
+        items = self.items
+        batch = []
+        while items:
+            batch.append(items.popleft())
+        if batch:
+            freed = sum(len(item[2]) for item in batch)
+            with self.lock:
+                self.bytes -= freed
+        return batch
+
+
+# -- the recorder --------------------------------------------------------------------------------
+class Recorder:
+    def __init__(self, graph: Ros1Graph, options: RecordOptions) -> None:
+        if not options.topics and not options.all_topics:
+            raise RostoolError("no topics to record: name them, or use -a (all) or -e REGEX")
+        if options.split and options.size is None and options.duration is None:
+            raise RostoolError("--split needs --size MB or --duration D")
+        self.graph = graph
+        self.types = graph.types
+        self.options = options
+        self.fmt = output_format(options)
+        self.patterns = [_compile(p) for p in options.topics] if options.regex else []
+        self.exclude = _compile(options.exclude) if options.exclude else None
+        self.queue = _Queue(options.buffer_bytes)
+        self.result = RecordResult()
+        self._subscribed: set[str] = set()
+        self._split_index = 0 if options.split else None
+        self._sink: Sink | None = None
+        self._file_start: int | None = None
+        self._failure: str | None = None
+        self._limit_reached = threading.Event()
+        self._stop = threading.Event()
+        self._finishing = threading.Event()
+        self._headers: dict[InboundLink, tuple[object, dict[str, str]]] = {}
+        self._opened = threading.Event()
+        self._open_error: RostoolError | None = None
+        self._topics_seen: set[str] = set()
+        self._written_in_file = 0
+        self._lock = threading.Lock()
+
+    # -- files -----------------------------------------------------------------------------------
+    def _open_next(self) -> Sink:
+        path = target_name(self.options, self.fmt, self._split_index)
+        _check_target(path, self.options.force)
+        if self.fmt == "bag":
+            sink: Sink = Ros1Sink(path, self.options.compression, self.options.force)
+        else:
+            sink = Ros2Sink(path, self.fmt, self.types, self.options.force)
+        self._file_start = None
+        self._written_in_file = 0
+        return sink
+
+    def _rotate(self) -> None:
+        assert self._sink is not None
+        sink, self._sink = self._sink, None
+        sink.close()
+        self.result.skipped.update(sink.problems)
+        self.result.files.append(sink.final)
+        assert self._split_index is not None
+        self._split_index += 1
+        self._sink = self._open_next()
+
+    # -- subscribing -----------------------------------------------------------------------------
+    def _wanted(self, topic: str) -> bool:
+        if self.exclude is not None and self.exclude.fullmatch(topic):
+            return False
+        if self.options.all_topics:
+            return True
+        return any(p.fullmatch(topic) for p in self.patterns)
+
+    def _subscribe(self, topic: str) -> None:
+        if topic in self._subscribed:
+            return
+        self._subscribed.add(topic)
+        self.graph.node.subscribe(topic, self.queue.put)
+
+    def _discover(self) -> None:
+        try:
+            published = self.graph.master.published_topics()
+        except RostoolError:
+            return  # the master is away: keep recording what is subscribed (as rosbag does)
+        for topic in published:
+            if topic not in self._subscribed and self._wanted(topic):
+                self._subscribe(topic)
+
+    # -- writer thread ---------------------------------------------------------------------------
+    def _write_loop(self) -> None:
+        queue = self.queue
+        last_flush = time.monotonic()
+        try:
+            while True:
+                finishing = self._finishing.is_set()
+                queue.ready.wait(FLUSH_INTERVAL)
+                queue.ready.clear()
+                batch = queue.take()
+                for link, stamp, payload in batch:
+                    if self._limit_reached.is_set():
+                        break
+                    self._write_one(link, stamp, payload)
+                now = time.monotonic()
+                if self._sink is not None and (not batch or now - last_flush >= FLUSH_INTERVAL):
+                    self._sink.flush()
+                    last_flush = now
+                if finishing and not batch:
+                    return
+        except OSError as err:
+            self._failure = err.strerror or str(err)
+        except RostoolError as err:
+            self._failure = str(err)
+        except Exception as err:  # a bug of ours: still end with a closed, valid file and one line
+            self._failure = f"internal error: {type(err).__name__}: {err}"
+        self.queue.accepting = False
+
+    def _write_one(self, link: InboundLink, stamp: int, payload: bytes) -> None:
+        known = self._headers.get(link)
+        if known is None:
+            header = link.header
+            topic = link.subscription.topic
+            fields = {
+                "topic": topic,
+                "type": header.get("type", "*"),
+                "md5sum": header.get("md5sum", "*"),
+                "message_definition": header.get("message_definition", ""),
+                "callerid": header.get("callerid", link.publisher_uri),
+                "latching": header.get("latching", "0"),
+            }
+            key = tuple(fields.values())
+            known = self._headers[link] = (key, fields)
+        key, fields = known
+        options = self.options
+        if options.split and options.duration is not None and self._file_start is not None:
+            limit = int(options.duration * 1e9)
+            if stamp - self._file_start > limit:
+                self._rotate()
+        sink = self._sink
+        if sink is None:
+            return
+        if self._file_start is None:
+            self._file_start = stamp
+        topic = fields["topic"]
+        if sink.write(key, fields, stamp, payload):
+            counts = self.result.counts
+            counts[topic] = counts.get(topic, 0) + 1
+            self._written_in_file += 1
+        if options.size is not None and sink.size >= options.size:
+            if options.split:
+                self._rotate()
+            else:  # the size asked for: take nothing more and end the recording
+                self.queue.accepting = False
+                self._limit_reached.set()
+                self._stop.set()
+
+    # -- main ------------------------------------------------------------------------------------
+    def status(self) -> RecordStatus:
+        sink = self._sink
+        return RecordStatus(
+            path=sink.active if sink is not None else Path(),
+            messages=self.result.messages,
+            bytes=sink.size if sink is not None else 0,
+            topics=len(self.result.counts),
+            dropped=sum(self.queue.dropped.values()),
+        )
+
+    def run(
+        self, stop: threading.Event, report: Callable[[RecordStatus], None] | None = None
+    ) -> RecordResult:
+        """Record until `stop` is set (or --duration/--size ends it, or a write fails)."""
+        options = self.options
+        self._stop = stop
+        # The writer thread owns the files from opening to closing (sqlite connections are per thread).
+        writer = threading.Thread(target=self._writer_main, name="bag-writer", daemon=True)
+        writer.start()
+        self._opened.wait()
+        if self._open_error is not None:
+            writer.join()
+            raise self._open_error
+        try:
+            if not options.regex:
+                for topic in options.topics:
+                    name = resolve(topic)
+                    if self.exclude is None or not self.exclude.fullmatch(name):
+                        self._subscribe(name)
+            started = time.monotonic()
+            next_poll = started
+            while not stop.is_set():
+                now = time.monotonic()
+                if self._failure is not None or self._limit_reached.is_set() or not writer.is_alive():
+                    break
+                if options.duration is not None and not options.split and now - started >= options.duration:
+                    break
+                if (options.all_topics or options.regex) and now >= next_poll:
+                    self._discover()
+                    next_poll = now + POLL_INTERVAL
+                if report is not None:
+                    report(self.status())
+                wait = POLL_INTERVAL
+                if options.duration is not None and not options.split:
+                    wait = min(wait, max(0.0, started + options.duration - now))
+                stop.wait(wait)
+        finally:
+            self.queue.accepting = False
+            self.graph.close()  # unregister now; nothing more arrives
+            self._finishing.set()
+            self.queue.ready.set()
+            writer.join()
+        self.result.dropped = dict(self.queue.dropped)
+        if self._failure is not None:
+            self.result.error = self._failure
+        return self.result
+
+    def _writer_main(self) -> None:
+        try:
+            self._sink = self._open_next()
+        except RostoolError as err:
+            self._open_error = err
+            return
+        finally:
+            self._opened.set()
+        self._write_loop()
+        self._close_last()
+
+    def _close_last(self) -> None:
+        sink, self._sink = self._sink, None
+        if sink is None:
+            return
+        try:
+            sink.close()
+        except RostoolError as err:
+            self._failure = str(err)
+            return
+        finally:
+            self.result.skipped.update(sink.problems)
+        if self._written_in_file or not self.result.files:
+            self.result.files.append(sink.final)
+        else:
+            sink.final.unlink()  # an empty last split file
+
+
+def _compile(pattern: str) -> re.Pattern[str]:
+    try:
+        return re.compile(pattern)
+    except re.error as err:
+        raise RostoolError(f"bad regular expression {pattern!r}: {err}") from err
+
+
+@contextlib.contextmanager
+def stop_on_signals(stop: threading.Event) -> Iterator[None]:
+    """SIGINT, SIGTERM and SIGHUP (terminal closed) set `stop`, so the recording ends cleanly; a second
+    signal aborts at once (the .active file is then left for `bag reindex`)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def handler(signum: int, _frame: FrameType | None) -> None:
+        if stop.is_set():
+            raise KeyboardInterrupt
+        stop.set()
+
+    previous = {sig: signal.signal(sig, handler) for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)}
+    try:
+        yield
+    finally:
+        for sig, old in previous.items():
+            signal.signal(sig, old)

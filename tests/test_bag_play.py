@@ -1,0 +1,350 @@
+"""`rostool bag play` into a real ROS 1 graph: Debian's rosmaster, rospy subscribers and `rostopic echo`."""
+
+from __future__ import annotations
+
+import os
+import re
+import signal
+import subprocess
+import sys
+import time
+import xmlrpc.client
+from pathlib import Path
+
+from tests.peers import HELLO_PUBLISHER
+from tests.support import (
+    TESTDATA,
+    debian,
+    debian_popen,
+    rostool,
+    rostool_popen,
+    start_rospy_script,
+    stop,
+    wait_until,
+)
+
+# Prints "WALLTIME VALUE" for each message; VALUE is the `data` field, or secs.nsecs of a Clock.
+TIMED_SUBSCRIBER = """
+import sys, time
+import rospy
+import roslib.message
+topic, type_name = sys.argv[1], sys.argv[2]
+cls = roslib.message.get_message_class(type_name)
+rospy.init_node('timed_sub', anonymous=True)
+def on(msg):
+    now = time.time()
+    if hasattr(msg, 'clock'):
+        value = '%d.%09d' % (msg.clock.secs, msg.clock.nsecs)
+    else:
+        value = str(msg.data)
+    print('%.6f %s' % (now, value), flush=True)
+rospy.Subscriber(topic, cls, on, queue_size=10000)
+rospy.spin()
+"""
+
+# Publishes Int32 0..COUNT-1 on TOPIC at RATE Hz, printing "WALLTIME VALUE" after each, then "DONE".
+COUNTER_PUBLISHER = """
+import sys, time
+import rospy
+from std_msgs.msg import Int32
+topic, rate, count = sys.argv[1], float(sys.argv[2]), int(sys.argv[3])
+rospy.init_node('counter', anonymous=True)
+pub = rospy.Publisher(topic, Int32, queue_size=1000)
+while pub.get_num_connections() < int(sys.argv[4] if len(sys.argv) > 4 else 0):
+    time.sleep(0.01)
+time.sleep(0.2)
+period = rospy.Rate(rate)
+for i in range(count):
+    pub.publish(Int32(data=i))
+    print('%.6f %d' % (time.time(), i), flush=True)
+    period.sleep()
+print('DONE', flush=True)
+rospy.spin()
+"""
+
+T0 = 1_700_000_000_000_000_000
+
+
+# -- helpers shared with test_bag_record ---------------------------------------------------------
+def system_state(env: dict[str, str]) -> tuple[list[list[object]], list[list[object]]]:
+    proxy = xmlrpc.client.ServerProxy(env["ROS_MASTER_URI"])
+    _code, _msg, (pubs, subs, _srvs) = proxy.getSystemState("/test")  # type: ignore[misc]
+    return pubs, subs
+
+
+def nodes_on(env: dict[str, str], topic: str, kind: str = "sub") -> list[str]:
+    pubs, subs = system_state(env)
+    for name, nodes in pubs if kind == "pub" else subs:
+        if name == topic:
+            return list(nodes)  # type: ignore[call-overload]
+    return []
+
+
+def wait_subscribed(env: dict[str, str], topic: str, count: int = 1) -> None:
+    assert wait_until(lambda: len(nodes_on(env, topic)) >= count, 20), f"nobody subscribed to {topic}"
+
+
+def wait_published(env: dict[str, str], topic: str) -> None:
+    assert wait_until(lambda: bool(nodes_on(env, topic, "pub")), 20), f"nobody publishes {topic}"
+
+
+def echo_strings(text: str) -> list[str]:
+    """The `data` values of `rostopic echo` output (strings unquoted)."""
+    return [m.strip('"') for m in re.findall(r"^data: (.*)$", text, re.M)]
+
+
+def timed_values(text: str) -> list[tuple[float, str]]:
+    rows = []
+    for line in text.splitlines():
+        parts = line.split(" ", 1)
+        if len(parts) == 2 and re.fullmatch(r"\d+\.\d+", parts[0]):
+            rows.append((float(parts[0]), parts[1]))
+    return rows
+
+
+def bag_values(path: Path, topic: str) -> list[str]:
+    """The `data` values on `topic`, read with rosbags' own reader (independent of ours)."""
+    from rosbags.highlevel import AnyReader
+    from rosbags.typesys import Stores, get_typestore
+
+    with AnyReader([path], default_typestore=get_typestore(Stores.ROS1_NOETIC)) as reader:
+        conns = [c for c in reader.connections if c.topic == topic]
+        return [str(reader.deserialize(data, c.msgtype).data) for c, _t, data in reader.messages(conns)]
+
+
+def write_int_bag(
+    path: Path, count: int, period_ns: int, topic: str = "/numbers", latching: int | None = None
+) -> Path:
+    """A ROS 1 bag of std_msgs/Int32 0..count-1, `period_ns` apart from T0 (rosbags' writer)."""
+    from rosbags.rosbag1 import Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    store = get_typestore(Stores.ROS1_NOETIC)
+    cls = store.types["std_msgs/msg/Int32"]
+    with Writer(path) as writer:
+        conn = writer.add_connection(topic, "std_msgs/msg/Int32", typestore=store, latching=latching)
+        for i in range(count):
+            writer.write(conn, T0 + i * period_ns, store.serialize_ros1(cls(data=i), "std_msgs/msg/Int32"))
+    return path
+
+
+def no_traceback(result: subprocess.CompletedProcess[str] | tuple[str, str]) -> None:
+    text = result.stderr if isinstance(result, subprocess.CompletedProcess) else result[1]
+    assert "Traceback" not in text, text
+
+
+def play_into(
+    env: dict[str, str],
+    tmp_path: Path,
+    topic: str,
+    type_name: str,
+    args: list[str],
+    wait: tuple[str, ...] = ("--wait-for-subscribers",),
+) -> tuple[subprocess.CompletedProcess[str], list[tuple[float, str]]]:
+    """Start a rospy subscriber on `topic`, run `rostool bag play ARGS`, return what it received."""
+    sub = start_rospy_script(TIMED_SUBSCRIBER, env, tmp_path, f"sub{time.monotonic_ns()}", [topic, type_name])
+    try:
+        wait_subscribed(env, topic)
+        played = rostool(["bag", "play", *wait, *args], env, timeout=60)
+        time.sleep(0.5)
+    finally:
+        out, _err = stop(sub)
+    assert played.returncode == 0, played.stderr
+    no_traceback(played)
+    return played, timed_values(out)
+
+
+# -- tests ---------------------------------------------------------------------------------------
+def test_bag_from_debian_rosbag_record_plays_to_rostopic_echo(
+    debian_master: dict[str, str], tmp_path: Path
+) -> None:
+    env = debian_master
+    bag = tmp_path / "theirs.bag"
+    pub = start_rospy_script(HELLO_PUBLISHER, env, tmp_path, "hello")
+    try:
+        wait_published(env, "/hello_world")
+        recorder = debian_popen(["rosbag", "record", "-O", str(bag), "/hello_world"], env)
+        wait_until(lambda: bag.with_name("theirs.bag.active").exists() or bag.exists(), 20)
+        time.sleep(2.5)
+        stop(recorder, timeout=10)
+    finally:
+        stop(pub)
+    expected = bag_values(bag, "/hello_world")
+    assert len(expected) >= 5 and all(v.startswith("Hello_World_") for v in expected)
+    echo = debian_popen(["rostopic", "echo", "/hello_world"], env)
+    try:
+        wait_subscribed(env, "/hello_world")
+        played = rostool(["bag", "play", "--wait-for-subscribers", "-r", "4", str(bag)], env)
+        assert played.returncode == 0, played.stderr
+        assert played.stderr == ""  # not a terminal: no status line
+        time.sleep(0.5)
+    finally:
+        out, _err = stop(echo)
+    assert echo_strings(out) == expected
+    # the publisher is gone from the master once play has ended
+    assert nodes_on(env, "/hello_world", "pub") == []
+
+
+def test_rate_loop_window_remap_and_clock(debian_master: dict[str, str], tmp_path: Path) -> None:
+    env = debian_master
+    bag = write_int_bag(tmp_path / "numbers.bag", count=41, period_ns=50_000_000)  # 2 s at 20 Hz
+    _played, normal = play_into(env, tmp_path, "/numbers", "std_msgs/Int32", [str(bag)])
+    assert [v for _t, v in normal] == [str(i) for i in range(41)]
+    _played, fast = play_into(env, tmp_path, "/numbers", "std_msgs/Int32", ["-r", "2", str(bag)])
+    assert [v for _t, v in fast] == [str(i) for i in range(41)]
+    span_normal, span_fast = normal[-1][0] - normal[0][0], fast[-1][0] - fast[0][0]
+    assert 1.8 < span_normal < 2.6, span_normal
+    assert 0.4 < span_fast / span_normal < 0.6, (span_fast, span_normal)
+    # -s/-u: exactly the messages stamped within [start + 0.5 s, start + 0.5 s + 0.3 s]
+    _played, window = play_into(
+        env, tmp_path, "/numbers", "std_msgs/Int32", ["-s", "0.5", "-u", "0.3", str(bag)]
+    )
+    assert [v for _t, v in window] == [str(i) for i in range(10, 17)]
+    # remapping, as an option and as a ROS-style argument
+    for remap in (["--remap", "/numbers:=/renamed"], ["/numbers:=/renamed"]):
+        _played, renamed = play_into(
+            env, tmp_path, "/renamed", "std_msgs/Int32", ["-r", "10", str(bag), *remap]
+        )
+        assert [v for _t, v in renamed] == [str(i) for i in range(41)]
+    # --clock: /clock carries bag times, every message's stamp among them, never going back
+    _played, clock = play_into(
+        env, tmp_path, "/clock", "rosgraph_msgs/Clock", ["--clock", str(bag)], wait=("-d", "1.5")
+    )
+    stamps = [int(v.split(".")[0]) * 1_000_000_000 + int(v.split(".")[1]) for _t, v in clock]
+    assert len(stamps) > 41 + 100  # 100 Hz during 2 s, plus one per message
+    assert all(T0 - 1000 <= s <= T0 + 2_000_000_000 + 1000 for s in stamps)
+    assert stamps == sorted(stamps)
+    message_stamps = {T0 + i * 50_000_000 for i in range(41)}
+    assert message_stamps <= set(stamps)
+
+
+def test_loop_repeats_and_ctrl_c_unregisters(debian_master: dict[str, str], tmp_path: Path) -> None:
+    env = debian_master
+    bag = write_int_bag(tmp_path / "short.bag", count=5, period_ns=20_000_000)
+    sub = start_rospy_script(TIMED_SUBSCRIBER, env, tmp_path, "sub", ["/numbers", "std_msgs/Int32"])
+    try:
+        wait_subscribed(env, "/numbers")
+        player = rostool_popen(["bag", "play", "-l", "--wait-for-subscribers", str(bag)], env)
+        wait_published(env, "/numbers")
+        time.sleep(1.5)
+        player.send_signal(signal.SIGINT)
+        out, err = player.communicate(timeout=10)
+        assert player.returncode == 130, err
+        assert "Traceback" not in err and out == ""
+        assert wait_until(lambda: nodes_on(env, "/numbers", "pub") == [], 5)
+    finally:
+        received, _err = stop(sub)
+    values = [v for _t, v in timed_values(received)]
+    assert len(values) > 10  # the bag holds 5
+    assert values[:10] == [str(i % 5) for i in range(10)]
+
+
+def test_latched_topic_reaches_a_late_subscriber(debian_master: dict[str, str], tmp_path: Path) -> None:
+    env = debian_master
+    bag = write_int_bag(tmp_path / "latched.bag", count=3, period_ns=10_000_000, topic="/map", latching=1)
+    player = rostool_popen(["bag", "play", "-k", "-d", "0", str(bag)], env)
+    try:
+        wait_published(env, "/map")
+        time.sleep(1.0)  # played and done; the latched publisher stays (-k)
+        late = debian(["rostopic", "echo", "-n", "1", "/map"], env, timeout=20)
+        assert late.stdout == "data: 2\n---\n", late.stderr
+    finally:
+        stop(player)
+
+
+def test_ros2_bag_plays_into_ros1(debian_master: dict[str, str], tmp_path: Path) -> None:
+    env = debian_master
+    echo = debian_popen(["rostopic", "echo", "/topic"], env)
+    try:
+        # rostopic echo subscribes once the topic has a publisher; play waits for it
+        bag = TESTDATA / "ros2" / "talker_mcap"
+        played = rostool(["bag", "play", "--wait-for-subscribers", "-r", "5", str(bag)], env)
+        assert played.returncode == 0, played.stderr
+        time.sleep(0.5)
+    finally:
+        out, _err = stop(echo)
+    assert echo_strings(out) == [f"Hello, world! {i}" for i in range(10)]
+    # the Log and ParameterEvent topics have no ROS 1 type: skipped, each with one warning line
+    warnings = played.stderr.splitlines()
+    assert len(warnings) == 2 and all(w.startswith("rostool: warning: skipping /") for w in warnings)
+    assert "rcl_interfaces/msg/Log" in played.stderr
+    # a single .db3 file too, and only a type without ROS 1 equivalent is an error
+    only_log = rostool(["bag", "play", str(TESTDATA / "ros2/talker_sqlite3"), "--topics", "/rosout"], env)
+    assert only_log.returncode == 1 and len(only_log.stderr.splitlines()) == 1
+    assert "nothing to play in ROS 1" in only_log.stderr and "rcl_interfaces/msg/Log" in only_log.stderr
+
+
+def test_bad_input_is_one_line(ros_env: dict[str, str], tmp_path: Path) -> None:
+    env = ros_env  # no master is running
+    missing = rostool(["bag", "play", str(tmp_path / "missing.bag")], env)
+    assert missing.returncode == 1 and missing.stderr.count("\n") == 1 and "no such file" in missing.stderr
+    text = tmp_path / "notes.txt"
+    text.write_text("hello\n")
+    not_bag = rostool(["bag", "play", str(text)], env)
+    assert not_bag.returncode == 1 and "not a bag" in not_bag.stderr and not_bag.stderr.count("\n") == 1
+    bag = write_int_bag(tmp_path / "n.bag", count=2, period_ns=1000)
+    no_master = rostool(["bag", "play", str(bag)], env)
+    assert no_master.returncode == 1 and "master" in no_master.stderr and no_master.stderr.count("\n") == 1
+    unknown = rostool(["bag", "play", str(bag), "--topics", "/nope"], env)
+    assert unknown.returncode == 1 and "/nope" in unknown.stderr
+    bad_remap = rostool(["bag", "play", str(bag), "--remap", "/a"], env)
+    assert bad_remap.returncode == 1 and "FROM:=TO" in bad_remap.stderr
+    ros2 = rostool(["--ros2", "bag", "play", str(bag)], env)
+    assert ros2.returncode == 1 and ros2.stderr.count("\n") == 1 and "ROS 1" in ros2.stderr
+    for result in (missing, not_bag, no_master, unknown, bad_remap, ros2):
+        no_traceback(result)
+
+
+def test_terminal_status_line_and_space_pauses(debian_master: dict[str, str], tmp_path: Path) -> None:
+    """In a terminal: rosbag's status line, space pauses and resumes, the terminal mode is restored."""
+    import pty
+    import termios
+
+    env = debian_master
+    bag = write_int_bag(tmp_path / "numbers.bag", count=21, period_ns=50_000_000)  # 1 s
+    master_fd, slave_fd = pty.openpty()
+    before = termios.tcgetattr(slave_fd)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "rostool", "bag", "play", "-d", "0", str(bag)],
+        env=env,
+        stdin=slave_fd,
+        stdout=slave_fd,
+        stderr=slave_fd,
+        start_new_session=True,
+        preexec_fn=lambda: __import__("fcntl").ioctl(0, termios.TIOCSCTTY, 0),
+    )
+    output = b""
+
+    def read_until(pattern: bytes, timeout: float) -> bool:
+        nonlocal output
+        import select
+
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            ready, _w, _x = select.select([master_fd], [], [], 0.05)
+            if ready:
+                try:
+                    output += os.read(master_fd, 4096)
+                except OSError:
+                    return pattern in output
+            if pattern in output:
+                return True
+        return pattern in output
+
+    try:
+        assert read_until(b"Hit space to toggle paused", 20), output
+        os.write(master_fd, b" ")
+        assert read_until(b"[PAUSED ]", 5), output
+        time.sleep(1.5)  # paused longer than the whole bag lasts
+        assert proc.poll() is None
+        os.write(master_fd, b" ")
+        assert read_until(b"Done.", 10), output
+        assert proc.wait(10) == 0
+        assert b"[RUNNING]  Bag Time: 1700000000." in output
+        assert re.search(rb"Duration: 1\.000000 / 1\.000000", output) or b"/ 1.000000" in output
+        assert termios.tcgetattr(slave_fd) == before
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+        os.close(master_fd)
+        os.close(slave_fd)
