@@ -23,6 +23,9 @@ COMMANDS: dict[str, tuple[str, str, str]] = {
     "topic": ("rostool.commands.topic", "topic", "List, echo, publish and measure topics."),
     "param": ("rostool.commands.param", "param", "Get, set, dump and load parameters."),
     "msg": ("rostool.commands.msg", "msg", "Show message types and their md5sums."),
+    "service": ("rostool.commands.service", "service", "List, inspect and call services."),
+    "srv": ("rostool.commands.srv", "srv", "Show service types and their md5sums."),
+    "action": ("rostool.commands.action", "action", "List actions, send goals, follow feedback, cancel."),
     "bag": ("rostool.commands.bag", "bag", "Inspect, play, record and convert bags (.bag, .db3, .mcap)."),
     "cheatsheet": (
         "rostool.commands.cheatsheet",

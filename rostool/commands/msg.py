@@ -5,6 +5,7 @@ from __future__ import annotations
 import click
 
 from rostool.commands._common import json_option, print_json
+from rostool.commands.srv import interfaces_option
 from rostool.errors import RostoolError
 
 
@@ -20,57 +21,57 @@ def msg() -> None:
     """
 
 
-def _matches(type_name: str) -> list[str]:
-    """Store names for `pkg/Type`, or for a bare `Type` in every package that has one (as rosmsg does)."""
-    from rostool.interfaces.names import to_store_name
-    from rostool.interfaces.ros1 import builtin_store
+def _matches(type_name: str, paths: tuple[str, ...] = ()) -> list[str]:
+    """`pkg/Type` if known, or every package's `Type` for a bare name (as rosmsg does); custom types too."""
+    from rostool.interfaces.names import to_ros1_name, to_store_name
+    from rostool.interfaces.sources import interfaces
 
-    store = builtin_store()
+    catalog = interfaces(paths)
     if "/" in type_name:
-        name = to_store_name(type_name)
-        return [name] if name in store.fielddefs else []
-    return sorted(n for n in store.fielddefs if n.endswith(f"/msg/{type_name}"))
+        name = to_ros1_name(to_store_name(type_name))
+        return [name] if catalog.has_message(name) else []
+    return [n for n in catalog.message_names() if n.endswith(f"/{type_name}")]
 
 
 @msg.command("show")
 @click.argument("type_name", metavar="TYPE")
+@interfaces_option
 @click.pass_context
-def show(ctx: click.Context, type_name: str) -> None:
-    """Print the fields of a message type (nested types expanded).
+def show(ctx: click.Context, type_name: str, interface_paths: tuple[str, ...]) -> None:
+    """Print the fields of a message type (nested types expanded), built in or from .msg/.action files.
 
     \b
-    Example:
+    Examples:
       rostool msg show geometry_msgs/Twist
+      rostool msg show robot_navigation_pkg/MoveToPointActionGoal --interfaces ~/catkin_ws
     """
-    from rostool.interfaces.describe import describe
-    from rostool.interfaces.names import to_ros1_name
-    from rostool.interfaces.ros1 import builtin_store
+    from rostool.interfaces.sources import interfaces
 
-    found = _matches(type_name)
+    found = _matches(type_name, interface_paths)
     if not found:
         raise RostoolError(f"unknown message type {type_name!r} (see `rostool msg list`)")
-    store = builtin_store()
+    catalog = interfaces(interface_paths)
     if len(found) == 1 and "/" in type_name:
-        click.echo("\n".join(describe(store, found[0])) + "\n")
+        click.echo("\n".join(catalog.show_lines(found[0])) + "\n")
         return
     for name in found:
-        click.echo(f"[{to_ros1_name(name)}]:")
-        click.echo("\n".join(describe(store, name)) + "\n")
+        click.echo(f"[{name}]:")
+        click.echo("\n".join(catalog.show_lines(name)) + "\n")
 
 
 @msg.command("list")
+@interfaces_option
 @json_option
-def list_types(as_json: bool) -> None:
-    """List the message types rostool knows.
+def list_types(interface_paths: tuple[str, ...], as_json: bool) -> None:
+    """List the message types rostool knows (built in, and from .msg/.action files in the sources).
 
     \b
     Example:
       rostool msg list | grep geometry_msgs
     """
-    from rostool.interfaces.names import to_ros1_name
-    from rostool.interfaces.ros1 import builtin_store
+    from rostool.interfaces.sources import interfaces
 
-    names = sorted(to_ros1_name(n) for n in builtin_store().fielddefs if "/msg/" in n)
+    names = interfaces(interface_paths).message_names()
     if as_json:
         print_json(names)
     else:
@@ -79,13 +80,14 @@ def list_types(as_json: bool) -> None:
 
 @msg.command("md5")
 @click.argument("type_name", metavar="TYPE")
-def md5(type_name: str) -> None:
+@interfaces_option
+def md5(type_name: str, interface_paths: tuple[str, ...]) -> None:
     """Print the md5sum of a message type (what ROS 1 peers compare).
 
     \b
     Example:
       rostool msg md5 std_msgs/String      # 992ce8a1687cec8c8bd883ec73ca41d1
     """
-    from rostool.interfaces.ros1 import TypeRegistry
+    from rostool.interfaces.sources import interfaces
 
-    click.echo(TypeRegistry().builtin(type_name).md5sum)
+    click.echo(interfaces(interface_paths).md5(type_name))

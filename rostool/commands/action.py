@@ -1,0 +1,240 @@
+"""`rostool action`: list, info, show, send-goal, cancel (actionlib over topics, ROS 1)."""
+
+from __future__ import annotations
+
+import re
+import sys
+from typing import TYPE_CHECKING, Any
+
+import click
+
+from rostool.commands._common import json_option, print_json
+from rostool.commands.service import ros1_graph
+from rostool.commands.srv import interfaces_option
+from rostool.errors import RostoolError
+
+if TYPE_CHECKING:
+    from rostool.graph.ros1.actions import GoalEvent
+
+_TYPE_NAME = re.compile(r"[A-Za-z][\w]*/(action/)?[A-Za-z]\w*\Z")
+
+
+@click.group()
+def action() -> None:
+    """Use actionlib actions (ROS 1): list servers, send goals and follow them, cancel.
+
+    Goal, result and feedback types come from .action files in source trees (--interfaces,
+    ROS_PACKAGE_PATH, the current workspace) or the built-in types: no catkin build needed.
+
+    \b
+    Examples:
+      rostool action list
+      rostool action info /navigate_2d_action
+      rostool action send-goal /navigate_2d_action "{point: {x: 1.0, y: 2.0}}" --feedback
+      rostool action cancel /navigate_2d_action
+    """
+
+
+@action.command("list")
+@json_option
+@click.pass_context
+def list_actions(ctx: click.Context, as_json: bool) -> None:
+    """List the actions of the live graph (namespaces with goal, cancel, status, feedback, result).
+
+    \b
+    Example:
+      rostool action list
+    """
+    from rostool.graph.ros1.actions import list_actions as find_actions
+
+    with ros1_graph(ctx, "actions") as graph:
+        found = find_actions(graph)
+    if as_json:
+        print_json([vars(a) for a in found])
+        return
+    for summary in found:
+        click.echo(summary.name)
+
+
+@action.command("info")
+@click.argument("name", metavar="ACTION")
+@click.option("--wait", "wait", type=click.FloatRange(min=0), default=2.0, show_default=True,
+              help="Seconds to wait for the server's goal status list.")  # fmt: skip
+@json_option
+@click.pass_context
+def info(ctx: click.Context, name: str, wait: float, as_json: bool) -> None:
+    """Show an action's type, server, clients and the goals its server tracks.
+
+    \b
+    Example:
+      rostool action info /navigate_2d_action
+    """
+    from rostool.graph.ros1.actions import action_summary, goal_states
+
+    with ros1_graph(ctx, "actions") as graph:
+        summary = action_summary(graph, name)
+        goals = goal_states(graph, summary.name, wait)
+    if as_json:
+        print_json({**vars(summary), "goals": None if goals is None else
+                    [{"id": g.id, "status": g.status_name, "text": g.text} for g in goals]})  # fmt: skip
+        return
+    click.echo(f"Action: {summary.name}\nType: {summary.type or '?'}")
+    for title, nodes in (("Server", summary.servers), ("Clients", summary.clients)):
+        click.echo(f"{title}: {'None' if not nodes else ''}")
+        for node in nodes:
+            click.echo(f" * {node}")
+    if goals is None:
+        click.echo(f"Goals: unknown (no status from the server within {wait:g} s)")
+        return
+    click.echo(f"Goals: {'None' if not goals else ''}")
+    for goal in goals:
+        click.echo(f" * {goal.id}: {goal.status_name}" + (f" ({goal.text})" if goal.text else ""))
+
+
+@action.command("show")
+@click.argument("type_name", metavar="TYPE")
+@click.option("-r", "--raw", is_flag=True, help="Print the .action text as written, comments included.")
+@interfaces_option
+def show(type_name: str, raw: bool, interface_paths: tuple[str, ...]) -> None:
+    """Print the goal, result and feedback fields of an action type.
+
+    \b
+    Examples:
+      rostool action show robot_navigation_pkg/MoveToPoint --interfaces ~/catkin_ws
+      rostool action show actionlib/TwoInts
+    """
+    from rostool.interfaces.action import load_action
+    from rostool.interfaces.sources import interfaces
+
+    catalog = interfaces(interface_paths)
+    found = load_action(catalog, type_name)
+    if raw and not found.origin.startswith("built-in"):
+        with open(found.origin, encoding="utf-8") as source:
+            click.echo(source.read(), nl=False)
+        return
+    lines: list[str] = []
+    for part in (found.goal, found.result, found.feedback):
+        if lines:
+            lines.append("---")
+        lines.extend(catalog.show_lines(part.name))
+    click.echo("\n".join(lines) + "\n")
+
+
+def _split_goal_args(values: tuple[str, ...]) -> tuple[str | None, tuple[str, ...]]:
+    """[TYPE] GOAL...: a first value spelled pkg/Type (never valid goal YAML) is the type."""
+    if len(values) >= 2 and _TYPE_NAME.match(values[0]):
+        return values[0], values[1:]
+    return None, values
+
+
+@action.command("send-goal", context_settings={"ignore_unknown_options": True})
+@click.argument("name", metavar="ACTION")
+@click.argument("values", nargs=-1, required=True, metavar="[TYPE] GOAL...")
+@click.option("--feedback", "show_feedback", is_flag=True, help="Print each feedback message as it arrives.")
+@click.option(
+    "--timeout",
+    type=click.FloatRange(min=0, min_open=True),
+    help="Cancel the goal and exit 1 when it has no result after S seconds.",
+)
+@interfaces_option
+@json_option
+@click.pass_context
+def send_goal(
+    ctx: click.Context,
+    name: str,
+    values: tuple[str, ...],
+    show_feedback: bool,
+    timeout: float | None,
+    interface_paths: tuple[str, ...],
+    as_json: bool,
+) -> None:
+    """Send a goal and wait for its result; Ctrl+C (or --timeout) cancels the goal first.
+
+    GOAL is one YAML mapping, or the goal's field values in order. TYPE (pkg/Type) may be left out when
+    the server is running: it is read from ACTION/goal. Exit status: 0 when the goal SUCCEEDED, 1 for any
+    other final status or a timeout, 130 on Ctrl+C.
+
+    \b
+    Examples:
+      rostool action send-goal /navigate_2d_action "{point: {x: 1.0, y: 2.0, z: 0.0}}" --feedback
+      rostool action send-goal /fibonacci actionlib_tutorials/Fibonacci "{order: 5}" --timeout 30
+    """
+    from rostool.graph.ros1.actions import send_goal as run_goal
+    from rostool.interfaces.sources import interfaces
+    from rostool.interfaces.values import message_args
+
+    type_name, goal_values = _split_goal_args(values)
+    goal = message_args(goal_values)
+    render = _Renderer(as_json, show_feedback)
+    with ros1_graph(ctx, "actions") as graph:
+        outcome = run_goal(
+            graph, interfaces(interface_paths), name, type_name, goal, timeout,
+            on_event=render.event, on_sent=render.sent, on_waiting=lambda text: click.echo(text, err=True),
+        )  # fmt: skip
+    if not outcome.succeeded:
+        ctx.exit(1)
+
+
+class _Renderer:
+    """Prints goal events: YAML blocks for people, one JSON object per event for scripts."""
+
+    def __init__(self, as_json: bool, show_feedback: bool) -> None:
+        self.as_json = as_json
+        self.show_feedback = show_feedback
+
+    def sent(self, goal_id: str) -> None:
+        if self.as_json:
+            print_json({"event": "sent", "goal_id": goal_id})
+        else:
+            click.echo(f"Goal sent: {goal_id}")
+        sys.stdout.flush()
+
+    def event(self, event: GoalEvent) -> None:
+        from rostool.output.plain import to_plain
+
+        if event.kind == "feedback" and not self.show_feedback:
+            return
+        if self.as_json:
+            body: dict[str, Any] = {"event": event.kind, "status": event.status_name}
+            if event.text:
+                body["text"] = event.text
+            if event.message is not None:
+                body[event.kind] = to_plain(event.message)
+            print_json(body)
+        elif event.kind == "feedback":
+            click.echo("Feedback:\n" + _indented(event.message))
+        else:
+            text = f" ({event.text})" if event.text else ""
+            click.echo(f"Status: {event.status_name}{text}")
+            if event.message is not None:
+                click.echo("Result:\n" + _indented(event.message))
+        sys.stdout.flush()
+
+
+def _indented(message: Any) -> str:
+    from rostool.output.yaml_text import to_yaml
+
+    text = to_yaml(message)
+    return "\n".join("  " + line for line in text.splitlines()) if text else "  {}"
+
+
+@action.command("cancel")
+@click.argument("name", metavar="ACTION")
+@click.argument("goal_id", required=False)
+@click.option("--all", "cancel_all", is_flag=True, help="Cancel every goal (the default without GOAL_ID).")
+@click.pass_context
+def cancel(ctx: click.Context, name: str, goal_id: str | None, cancel_all: bool) -> None:
+    """Ask an action server to cancel one goal (by its id), or every goal when no GOAL_ID is given.
+
+    \b
+    Examples:
+      rostool action cancel /navigate_2d_action
+      rostool action cancel /navigate_2d_action /rostool-4242-1-1712345678.5
+    """
+    from rostool.graph.ros1.actions import cancel_goals
+
+    if cancel_all and goal_id is not None:
+        raise RostoolError("give a GOAL_ID or --all, not both (`rostool action info ACTION` lists goal ids)")
+    with ros1_graph(ctx, "actions") as graph:
+        cancel_goals(graph, name, goal_id or "")
+    click.echo(f"canceled {goal_id or 'every goal'} of {name}")
