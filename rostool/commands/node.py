@@ -7,6 +7,7 @@ import time
 import click
 
 from rostool.commands._common import json_option, live_graph, print_json
+from rostool.graph.base import NodeInfo
 
 
 @click.group()
@@ -54,6 +55,9 @@ def info(ctx: click.Context, name: str, as_json: bool) -> None:
     """
     with live_graph(ctx) as graph:
         details = graph.node_info(name)
+        if graph.ros_version == 2:
+            _info_ros2(details, as_json)
+            return
         uris = {n: graph.node_uri(n) for n in graph.node_names()}
     if as_json:
         print_json(
@@ -91,6 +95,25 @@ def info(ctx: click.Context, name: str, as_json: bool) -> None:
                 f"    * transport: {c.transport}",
             ]
     click.echo("\n".join(lines) + "\n")
+
+
+def _info_ros2(details: NodeInfo, as_json: bool) -> None:
+    """ros2 node info's form: the node's endpoints grouped by kind, with their types."""
+    servers = [(s, details.service_types.get(s, "?")) for s in details.services]
+    groups: tuple[tuple[str, list[tuple[str, str]]], ...] = (
+        ("Subscribers", details.subscriptions), ("Publishers", details.publications),
+        ("Service Servers", servers), ("Service Clients", details.service_clients),
+        ("Action Servers", []), ("Action Clients", []),
+    )  # fmt: skip
+    if as_json:
+        print_json({"name": details.name, **{title.lower().replace(" ", "_"): [
+            {"name": n, "type": t} for n, t in entries] for title, entries in groups}})  # fmt: skip
+        return
+    lines = [details.name]
+    for title, entries in groups:
+        lines.append(f"  {title}:")
+        lines += [f"    {n}: {t}" for n, t in entries]
+    click.echo("\n".join(lines))
 
 
 @node.command("ping")

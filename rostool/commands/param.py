@@ -22,6 +22,7 @@ def param() -> None:
       rostool param get /wheel_radius
       rostool param dump params.yaml
       rostool param load params.yaml
+      rostool --ros2 param get /talker use_sim_time     # ROS 2: NODE then PARAM
     """
 
 
@@ -44,10 +45,11 @@ def list_params(ctx: click.Context, namespace: str, as_json: bool) -> None:
     Example:
       rostool param list /robot
     """
-    from rostool.graph.ros1.names import resolve
-
-    prefix = resolve(namespace)
     with live_graph(ctx) as graph:
+        if graph.ros_version == 2:
+            _list_ros2(graph, None if namespace == "/" else namespace, as_json)
+            return
+        prefix = graph.resolve(namespace)
         names = [n for n in graph.param_names() if prefix == "/" or n == prefix or n.startswith(prefix + "/")]
     if as_json:
         print_json(names)
@@ -56,11 +58,43 @@ def list_params(ctx: click.Context, namespace: str, as_json: bool) -> None:
             click.echo(name)
 
 
+def _list_ros2(graph: Any, node: str | None, as_json: bool) -> None:
+    """ros2 param list's forms: one node's names, or every node's under its name."""
+    from rostool.graph.ros2.params import ParameterClient
+
+    if node is not None:
+        names = ParameterClient(graph, node).names()
+        if as_json:
+            print_json(names)
+        else:
+            click.echo("\n".join(f"  {n}" for n in names))
+        return
+    found: dict[str, list[str]] = {}
+    for node_name in graph.node_names():
+        try:
+            found[node_name] = ParameterClient(graph, node_name, timeout=2.0).names()
+        except RostoolError:
+            continue  # a node without parameter services
+    if as_json:
+        print_json(found)
+        return
+    for node_name, names in found.items():
+        click.echo(f"{node_name}:\n" + "\n".join(f"  {n}" for n in names))
+
+
+def _ros2_only_args(graph: Any, extra: str | None, usage: str) -> None:
+    if graph.ros_version == 2 and extra is None:
+        raise RostoolError(f"ROS 2 parameters belong to a node: {usage}")
+    if graph.ros_version != 2 and extra is not None:
+        raise RostoolError(f"too many arguments for a ROS 1 parameter ({usage} is the ROS 2 form)")
+
+
 @param.command("get")
 @click.argument("name")
+@click.argument("param_name", required=False, metavar="[PARAM]")
 @json_option
 @click.pass_context
-def get(ctx: click.Context, name: str, as_json: bool) -> None:
+def get(ctx: click.Context, name: str, param_name: str | None, as_json: bool) -> None:
     """Print a parameter (a namespace prints as a YAML mapping).
 
     \b
@@ -68,6 +102,10 @@ def get(ctx: click.Context, name: str, as_json: bool) -> None:
       rostool param get /rosdistro
     """
     with live_graph(ctx) as graph:
+        _ros2_only_args(graph, param_name, "rostool param get NODE PARAM")
+        if param_name is not None:
+            _get_ros2(graph, name, param_name, as_json)
+            return
         value = graph.get_param(name)
     if as_json:
         print_json(value)
@@ -75,12 +113,25 @@ def get(ctx: click.Context, name: str, as_json: bool) -> None:
         click.echo(_yaml_text(value))  # rosparam get adds a newline after the YAML, so do we
 
 
+def _get_ros2(graph: Any, node: str, name: str, as_json: bool) -> None:
+    from rostool.graph.ros2.params import NOT_SET, ParameterClient, describe_value, to_python
+
+    value = ParameterClient(graph, node).get(name)
+    if int(value.type) == NOT_SET:
+        raise RostoolError(f"parameter {name} is not set on node {graph.resolve(node)}")
+    if as_json:
+        print_json(to_python(value))
+    else:
+        click.echo(describe_value(value))
+
+
 @param.command("set", context_settings={"ignore_unknown_options": True})
 @click.argument("name")
 @click.argument("value")
+@click.argument("ros2_value", required=False, metavar="[VALUE2]")
 @click.option("-t", "--textfile", is_flag=True, help="VALUE is a file whose text becomes a string parameter.")
 @click.pass_context
-def set_(ctx: click.Context, name: str, value: str, textfile: bool) -> None:
+def set_(ctx: click.Context, name: str, value: str, ros2_value: str | None, textfile: bool) -> None:
     """Set a parameter; VALUE is YAML, so 0.05 is a float, 5 an int, true a bool, [1, 2] a list.
 
     \b
@@ -91,9 +142,63 @@ def set_(ctx: click.Context, name: str, value: str, textfile: bool) -> None:
     """
     from rostool.interfaces.values import parse_yaml
 
-    parsed = _read_text(value) if textfile else parse_yaml(value, f"the value of {name}")
     with live_graph(ctx) as graph:
+        _ros2_only_args(graph, ros2_value, "rostool param set NODE PARAM VALUE")
+        if ros2_value is not None:
+            node, name, value = name, value, ros2_value
+        parsed = _read_text(value) if textfile else parse_yaml(value, f"the value of {name}")
+        if ros2_value is not None:
+            _set_ros2(graph, node, name, parsed)
+            return
         _set_checked(graph, name, parsed)
+
+
+def _set_ros2(graph: Any, node: str, name: str, value: Any) -> None:
+    from rostool.graph.ros2.params import ParameterClient
+
+    ok, reason = ParameterClient(graph, node).set(name, value)
+    if not ok:
+        raise RostoolError(f"setting parameter {name} on {graph.resolve(node)} failed: {reason or 'refused'}")
+    click.echo("Set parameter successful")
+
+
+@param.command("describe")
+@click.argument("node")
+@click.argument("names", nargs=-1, required=True, metavar="PARAM...")
+@json_option
+@click.pass_context
+def describe(ctx: click.Context, node: str, names: tuple[str, ...], as_json: bool) -> None:
+    """ROS 2: show a parameter's type, description and constraints.
+
+    \b
+    Example:
+      rostool --ros2 param describe /talker use_sim_time
+    """
+    from rostool.graph.ros2.params import TYPE_NAMES, ParameterClient
+
+    with live_graph(ctx) as graph:
+        if graph.ros_version != 2:
+            raise RostoolError("param describe applies to ROS 2 nodes (ROS 1 parameters have no descriptors)")
+        client = ParameterClient(graph, node)
+        found = [client.describe(name) for name in names]
+    rows = [
+        {"name": d.name, "type": TYPE_NAMES.get(int(d.type), str(d.type)), "description": d.description,
+         "additional_constraints": d.additional_constraints, "read_only": bool(d.read_only)}
+        for d in found
+    ]  # fmt: skip
+    if as_json:
+        print_json(rows)
+        return
+    for row in rows:
+        lines = [f"Parameter name: {row['name']}", f"  Type: {row['type']}"]
+        if row["description"]:
+            lines.append(f"  Description: {row['description']}")
+        lines.append("  Constraints:")
+        if row["read_only"]:
+            lines.append("    Read only: true")
+        if row["additional_constraints"]:
+            lines.append(f"    {row['additional_constraints']}")
+        click.echo("\n".join(lines))
 
 
 def _read_text(path: str) -> str:
@@ -169,13 +274,12 @@ def load(ctx: click.Context, file: str, namespace: str) -> None:
     Example:
       rostool param load params.yaml /robot
     """
-    from rostool.graph.ros1.names import resolve
     from rostool.interfaces.values import parse_yaml
 
     text = sys.stdin.read() if file == "-" else _read_text(file)
     value = parse_yaml(text, file)
-    prefix = resolve(namespace)
     with live_graph(ctx) as graph:
+        prefix = graph.resolve(namespace)
         if isinstance(value, dict):
             _set_checked(graph, prefix, value)
         elif value is None:

@@ -2,14 +2,53 @@
 
 from __future__ import annotations
 
+import functools
 import sys
 import time
+from collections.abc import Callable
 from typing import Any
 
 import click
 
 from rostool.commands._common import json_option, live_graph, print_json
 from rostool.errors import RostoolError
+from rostool.graph.ros2.dds import PROFILES, QosRequest
+
+_QOS_OPTIONS = (
+    click.option("--qos-profile", type=click.Choice(sorted(PROFILES)),
+                 help="ROS 2: QoS preset to start from (echo/hz default: adapt to the publishers)."),
+    click.option("--qos-reliability", type=click.Choice(["reliable", "best_effort"]), help="ROS 2 only."),
+    click.option("--qos-durability", type=click.Choice(["volatile", "transient_local"]), help="ROS 2 only."),
+    click.option("--qos-depth", type=click.IntRange(min=0), help="ROS 2: history depth (0 keeps all)."),
+)  # fmt: skip
+
+
+def qos_options(func: Callable[..., Any]) -> Callable[..., Any]:
+    """Add the ROS 2 QoS options; the command receives them as one `qos: QosRequest`."""
+
+    @functools.wraps(func)
+    def wrapper(
+        *args: Any,
+        qos_profile: str | None,
+        qos_reliability: str | None,
+        qos_durability: str | None,
+        qos_depth: int | None,
+        **kwargs: Any,
+    ) -> Any:
+        request = QosRequest(qos_profile, qos_reliability, qos_durability, qos_depth)
+        return func(*args, qos=request, **kwargs)
+
+    for option in reversed(_QOS_OPTIONS):
+        wrapper = option(wrapper)
+    return wrapper
+
+
+def _use_qos(graph: Any, request: QosRequest) -> None:
+    if not request.given:
+        return
+    if graph.ros_version != 2:
+        raise RostoolError("--qos-* options apply to ROS 2 graphs only: ROS 1 topics have no QoS")
+    graph.qos_request = request
 
 
 @click.group()
@@ -68,22 +107,26 @@ def list_topics(
 
 @topic.command("info")
 @click.argument("name")
+@click.option("-v", "--verbose", is_flag=True, help="ROS 2: every endpoint with its node, GID and QoS.")
 @json_option
 @click.pass_context
-def info(ctx: click.Context, name: str, as_json: bool) -> None:
+def info(ctx: click.Context, name: str, verbose: bool, as_json: bool) -> None:
     """Show a topic's type, publishers and subscribers.
 
     \b
     Example:
       rostool topic info /hello_world
     """
-    from rostool.graph.ros1.names import resolve
-
-    resolved = resolve(name)
     with live_graph(ctx) as graph:
+        resolved = graph.resolve(name)
         found = next((t for t in graph.topics() if t.name == resolved), None)
         if found is None:
             raise RostoolError(f"unknown topic {resolved}: no node publishes or subscribes to it")
+        if graph.ros_version == 2:
+            _info_ros2(graph, found, verbose, as_json)
+            return
+        if verbose:
+            raise RostoolError("topic info -v applies to ROS 2 graphs only")
         uris = {node: _node_uri(graph, node) for node in {*found.publishers, *found.subscribers}}
     if as_json:
         print_json({**vars(found), "uris": uris})
@@ -98,6 +141,29 @@ def info(ctx: click.Context, name: str, as_json: bool) -> None:
             click.echo(f"{title}: None")
         click.echo("")
     click.echo("")
+
+
+def _info_ros2(graph: Any, found: Any, verbose: bool, as_json: bool) -> None:
+    """ros2 topic info's form: type and counts, with -v every endpoint."""
+    endpoints = graph.topic_endpoints(found.name)
+    if as_json:
+        print_json({**vars(found), "endpoints": endpoints})
+        return
+    lines = [f"Type: {found.type}"]
+    for title, kind in (("Publisher", "PUBLISHER"), ("Subscription", "SUBSCRIPTION")):
+        rows = [e for e in endpoints if e["endpoint_type"] == kind]
+        lines += ["", f"{title} count: {len(rows)}"] if verbose else [f"{title} count: {len(rows)}"]
+        for row in rows if verbose else []:
+            namespace, _, node = row["node"].rpartition("/")
+            qos = row["qos"]
+            depth = f"KEEP_LAST ({qos['depth']})" if qos["depth"] else "KEEP_ALL"
+            lines += [
+                "", f"Node name: {node}", f"Node namespace: {namespace or '/'}", f"Topic type: {row['type']}",
+                f"Topic type hash: {row['type_hash'] or 'UNKNOWN'}", f"Endpoint type: {kind}",
+                f"GID: {row['gid']}", "QoS profile:", f"  Reliability: {str(qos['reliability']).upper()}",
+                f"  History (Depth): {depth}", f"  Durability: {str(qos['durability']).upper()}",
+            ]  # fmt: skip
+    click.echo("\n".join(lines))
 
 
 def _node_uri(graph: Any, node: str) -> str:
@@ -134,9 +200,11 @@ def find(ctx: click.Context, type_name: str) -> None:
     Example:
       rostool topic find std_msgs/String
     """
+    from rostool.interfaces.names import to_store_name
+
     with live_graph(ctx) as graph:
         for t in graph.topics():
-            if t.type == type_name:
+            if t.type == type_name or (graph.ros_version == 2 and t.type == to_store_name(type_name)):
                 click.echo(t.name)
 
 
@@ -158,6 +226,7 @@ def find(ctx: click.Context, type_name: str) -> None:
 @click.option("--nostr", is_flag=True, help="Show strings as their length.")
 @click.option("--filter", "filter_text", help="Only messages where EXPR holds, e.g. \"m.data == 'go'\".")
 @click.pass_context
+@qos_options
 def echo(
     ctx: click.Context,
     name: str,
@@ -170,6 +239,7 @@ def echo(
     noarr: bool,
     nostr: bool,
     filter_text: str | None,
+    qos: QosRequest,
 ) -> None:
     """Print the messages of a topic (YAML like rostopic echo, or --json/--csv).
 
@@ -186,11 +256,13 @@ def echo(
     if as_json and as_csv:
         raise RostoolError("choose one of --json and --csv")
     keep = compile_filter(filter_text) if filter_text else None
-    renderer = EchoRenderer("json" if as_json else "csv" if as_csv else "yaml", fields, noarr, nostr)
+    mode: Any = "json" if as_json else "csv" if as_csv else "yaml"
     limit = 1 if once else count
     out = sys.stdout
     interactive = out.isatty()
     with live_graph(ctx) as graph:
+        _use_qos(graph, qos)
+        renderer = EchoRenderer(mode, fields, noarr, nostr, style=graph.time_style)
         if graph.topic_type(name) is None:
             click.echo(f"WARNING: topic [{name}] does not appear to be published yet", err=True)
         inbox = Inbox(graph, name)
@@ -219,8 +291,14 @@ def echo(
 @click.option("--json", "as_json", is_flag=True, help="One JSON object per topic and report.")
 @click.option("--duration", type=click.FloatRange(min=0, min_open=True), help="Stop after S seconds.")
 @click.pass_context
+@qos_options
 def hz(
-    ctx: click.Context, names: tuple[str, ...], window: int | None, as_json: bool, duration: float | None
+    ctx: click.Context,
+    names: tuple[str, ...],
+    window: int | None,
+    as_json: bool,
+    duration: float | None,
+    qos: QosRequest,
 ) -> None:
     """Measure the publishing rate of one or more topics (counts every message, never decodes).
 
@@ -230,10 +308,10 @@ def hz(
       rostool topic hz /scan /odom -w 100
     """
     from rostool.graph.rates import RateMeter
-    from rostool.graph.ros1.names import resolve
 
-    meters = {resolve(n): RateMeter(window) for n in names}
     with live_graph(ctx) as graph:
+        _use_qos(graph, qos)
+        meters = {graph.resolve(n): RateMeter(window) for n in names}
         for topic_name, meter in meters.items():
             if graph.topic_type(topic_name) is None:
                 click.echo(f"WARNING: topic [{topic_name}] does not appear to be published yet", err=True)
@@ -302,7 +380,8 @@ def _print_rates(meters: dict[str, Any], as_json: bool) -> None:
 )
 @click.option("--duration", type=click.FloatRange(min=0, min_open=True), help="Stop after S seconds.")
 @click.pass_context
-def bw(ctx: click.Context, name: str, window: int, duration: float | None) -> None:
+@qos_options
+def bw(ctx: click.Context, name: str, window: int, duration: float | None, qos: QosRequest) -> None:
     """Measure the bandwidth a topic uses (bytes of serialized messages per second).
 
     \b
@@ -313,6 +392,7 @@ def bw(ctx: click.Context, name: str, window: int, duration: float | None) -> No
 
     meter = SizeMeter(window)
     with live_graph(ctx) as graph:
+        _use_qos(graph, qos)
         graph.subscribe(name, lambda r: meter.arrived(time.monotonic(), len(r.payload)))
         click.echo(f"subscribed to [{name}]")
         started = time.monotonic()
@@ -383,6 +463,7 @@ def delay(ctx: click.Context, name: str, window: int | None, duration: float | N
 )
 @click.option("-q", "--quiet", is_flag=True, help="Print nothing.")
 @click.pass_context
+@qos_options
 def pub(
     ctx: click.Context,
     name: str,
@@ -394,6 +475,7 @@ def pub(
     count: int | None,
     file: str | None,
     quiet: bool,
+    qos: QosRequest,
 ) -> None:
     """Publish a message given as YAML (missing fields get defaults).
 
@@ -408,6 +490,7 @@ def pub(
     from rostool.graph.publishing import publish_loop
 
     with live_graph(ctx) as graph:
+        _use_qos(graph, qos)
         publish_loop(
             graph, name, type_name, values, rate=rate, once=once, latch=latch, count=count,
             file=file, say=(lambda _t: None) if quiet else click.echo,

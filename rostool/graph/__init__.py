@@ -6,8 +6,6 @@ import os
 import socket
 from typing import TYPE_CHECKING
 
-from rostool.errors import RostoolError
-
 if TYPE_CHECKING:
     from rostool.graph.base import Graph
 
@@ -40,10 +38,9 @@ def open_graph(explicit_version: int | None, node_name: str = "rostool") -> Grap
     """Connect to the live graph of the selected ROS version."""
     version = select_ros_version(explicit_version)
     if version == 2:
-        raise RostoolError(
-            "ROS 2 graphs are not supported yet by this rostool version; "
-            "use --ros1 (with a ROS 1 master) or the bag verbs, which read ROS 2 bags"
-        )
+        from rostool.graph.ros2.graph import Ros2Graph
+
+        return Ros2Graph(node_name)
     from rostool.graph.ros1.graph import Ros1Graph
 
     return Ros1Graph(node_name)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, Protocol
+from typing import Any, Literal, Protocol
 
 
 @dataclass
@@ -32,6 +32,9 @@ class NodeInfo:
     subscriptions: list[tuple[str, str]]
     services: list[str]
     connections: list[Connection]
+    # ROS 2: service name -> type for `services`, and the services the node calls (name, type)
+    service_types: dict[str, str] = field(default_factory=dict)
+    service_clients: list[tuple[str, str]] = field(default_factory=list)
 
 
 class Received:
@@ -68,7 +71,11 @@ class Publisher(Protocol):
 class Graph(Protocol):
     """Nodes, topics, parameters of one live graph."""
 
+    ros_version: int
+    time_style: Literal["ros1", "ros2"]  # how echo prints times (secs/nsecs or sec/nanosec)
+
     def close(self) -> None: ...
+    def resolve(self, name: str) -> str: ...
 
     # nodes
     def node_names(self) -> list[str]: ...

@@ -5,7 +5,7 @@ from __future__ import annotations
 import contextlib
 import time
 from collections.abc import Callable
-from typing import Any
+from typing import Any, Literal
 
 from rostool.errors import RostoolError
 from rostool.graph.base import Connection, NodeInfo, Publisher, Received, Subscription, TopicInfo
@@ -19,6 +19,9 @@ from rostool.interfaces.ros1 import TypeRegistry
 
 class Ros1Graph:
     """Read-only verbs use the master alone; subscribing or publishing starts a node lazily."""
+
+    ros_version = 1
+    time_style: Literal["ros1", "ros2"] = "ros1"
 
     def __init__(self, node_name: str = "rostool") -> None:
         self._node_name = node_name
@@ -43,6 +46,9 @@ class Ros1Graph:
         if self._node is not None:
             self._node.close()
             self._node = None
+
+    def resolve(self, name: str) -> str:
+        return resolve(name)
 
     # --- nodes --------------------------------------------------------------------------------
     def node_names(self) -> list[str]:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import http.client
+import threading
 import xmlrpc.client
 from typing import Any
 
@@ -34,14 +35,34 @@ class Unreachable(RostoolError):
     """Nothing answered at the URI (refused, timed out, unknown host)."""
 
 
+_proxies = threading.local()
+
+
+def _cached_proxy(uri: str, timeout: float) -> xmlrpc.client.ServerProxy:
+    """One proxy per thread and (uri, timeout): its HTTP/1.1 connection is reused between calls.
+
+    A ServerProxy is not safe to share between threads, hence the thread-local cache. A connection the
+    server closed in between is retried once by xmlrpc.client itself.
+    """
+    cache: dict[tuple[str, float], xmlrpc.client.ServerProxy] | None = getattr(_proxies, "cache", None)
+    if cache is None:
+        cache = _proxies.cache = {}
+    proxy = cache.get((uri, timeout))
+    if proxy is None:
+        proxy = cache[(uri, timeout)] = server_proxy(uri, timeout)
+    return proxy
+
+
 def call(uri: str, method: str, *args: Any, what: str, timeout: float = DEFAULT_TIMEOUT) -> Any:
     """Call an XML-RPC method that answers [code, status, value]; return value or raise one clear error."""
-    proxy = server_proxy(uri, timeout)
+    proxy = _cached_proxy(uri, timeout)
     try:
         code, status, value = getattr(proxy, method)(*args)
     except OSError as err:
+        _proxies.cache.pop((uri, timeout), None)  # never reuse a connection in an unknown state
         raise Unreachable(f"cannot reach {what} at {uri}: {_reason(err)}") from err
     except (xmlrpc.client.Fault, xmlrpc.client.ProtocolError) as err:
+        _proxies.cache.pop((uri, timeout), None)
         raise RostoolError(f"{what} at {uri} failed on {method}: {err}") from err
     if code != 1:
         raise RemoteError(f"{status}")

@@ -1,0 +1,258 @@
+"""The DDS side of a ROS 2 process: domain id, discovery range, Cyclone configuration, QoS, raw samples.
+
+Mirrors what rmw_cyclonedds_cpp does when rclcpp/rclpy create a context (rmw_node.cpp, Iron and later):
+- ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST: multicast off, `localhost` as a static peer, participant
+  index `auto` with at most 32 participants per host; SUBNET: Cyclone's defaults (multicast);
+  OFF: multicast off and a per-process discovery tag. ROS_STATIC_PEERS adds peers (not for OFF).
+  ROS_LOCALHOST_ONLY=1 (deprecated) forces LOCALHOST, =0 lets the range variable decide.
+- CYCLONEDDS_URI, when set, is appended after that generated fragment, so the user's file wins.
+- the participant's USER_DATA is `enclave=/;`.
+Two deliberate differences: rostool's default range is LOCALHOST (ROS 2's is SUBNET), and in LOCALHOST
+mode it also binds to 127.0.0.1, so nothing rostool does ever leaves the machine unless asked.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+from collections.abc import Mapping
+from dataclasses import dataclass, replace
+from typing import Any
+
+from rostool.errors import RostoolError
+
+DOMAIN_ID_MAX = 232  # ROS 2's documented maximum: higher ids map to UDP ports past the usable range
+RANGES = ("LOCALHOST", "SUBNET", "OFF", "SYSTEM_DEFAULT")
+MAX_PARTICIPANTS_PER_HOST = 32
+
+
+def domain_id(env: Mapping[str, str] = os.environ) -> int:
+    text = env.get("ROS_DOMAIN_ID", "").strip()
+    if not text:
+        return 0
+    try:
+        value = int(text)
+    except ValueError:
+        value = -1
+    if not 0 <= value <= DOMAIN_ID_MAX:
+        raise RostoolError(f"ROS_DOMAIN_ID={text!r} is not valid: use an integer from 0 to {DOMAIN_ID_MAX}")
+    return value
+
+
+def discovery_range(env: Mapping[str, str] = os.environ) -> str:
+    localhost_only = env.get("ROS_LOCALHOST_ONLY", "").strip()
+    if localhost_only == "1":
+        return "LOCALHOST"
+    text = env.get("ROS_AUTOMATIC_DISCOVERY_RANGE", "").strip().upper()
+    if not text:
+        return "SUBNET" if localhost_only == "0" else "LOCALHOST"
+    if text not in RANGES:
+        raise RostoolError(
+            f"ROS_AUTOMATIC_DISCOVERY_RANGE={text!r} is not valid: use one of {', '.join(RANGES)}"
+        )
+    return text
+
+
+def static_peers(env: Mapping[str, str] = os.environ) -> list[str]:
+    return [peer.strip() for peer in env.get("ROS_STATIC_PEERS", "").split(";") if peer.strip()]
+
+
+def _xml_attr(text: str) -> str:
+    return text.replace("&", "&amp;").replace('"', "&quot;").replace("<", "&lt;")
+
+
+def cyclone_config(env: Mapping[str, str] = os.environ) -> str:
+    """The configuration string for `Domain(id, config)`: generated fragment, then CYCLONEDDS_URI."""
+    scope = discovery_range(env)
+    peers = [] if scope in ("OFF", "SYSTEM_DEFAULT") else static_peers(env)
+    general = ""
+    discovery = ""
+    if scope == "LOCALHOST":
+        general = (
+            '<Interfaces><NetworkInterface address="127.0.0.1"/></Interfaces>'
+            "<AllowMulticast>false</AllowMulticast>"
+        )
+        peers = ["127.0.0.1", *peers]
+    elif scope == "OFF":
+        general = "<AllowMulticast>false</AllowMulticast>"
+        discovery = f"<ParticipantIndex>none</ParticipantIndex><Tag>ros_discovery_off_{os.getpid()}</Tag>"
+    if scope in ("LOCALHOST", "SUBNET") and (peers or scope == "LOCALHOST"):
+        discovery = (
+            "<ParticipantIndex>auto</ParticipantIndex>"
+            f"<MaxAutoParticipantIndex>{MAX_PARTICIPANTS_PER_HOST}</MaxAutoParticipantIndex>"
+        )
+    if peers:
+        discovery += "<Peers>" + "".join(f'<Peer address="{_xml_attr(p)}"/>' for p in peers) + "</Peers>"
+    parts = []
+    if general or discovery:
+        body = (f"<General>{general}</General>" if general else "") + (
+            f"<Discovery>{discovery}</Discovery>" if discovery else ""
+        )
+        parts.append(f'<CycloneDDS><Domain Id="any">{body}</Domain></CycloneDDS>')
+    user = env.get("CYCLONEDDS_URI", "").strip()
+    if user:
+        parts.append(user)
+    return ",".join(parts)
+
+
+# --- QoS -------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class QosProfile:
+    """The ROS 2 QoS policies the verbs choose; None leaves the DDS default."""
+
+    reliability: str | None = "reliable"  # reliable | best_effort
+    durability: str | None = "volatile"  # volatile | transient_local
+    depth: int | None = 10  # keep last N; 0 = keep all
+
+    def describe(self) -> str:
+        default = "system default"
+        return f"{self.reliability or default}, {self.durability or default}, depth {self.depth}"
+
+
+# rmw's presets (rmw/qos_profiles.h), by ros2cli's short keys.
+PROFILES: dict[str, QosProfile] = {
+    "default": QosProfile("reliable", "volatile", 10),
+    "sensor_data": QosProfile("best_effort", "volatile", 5),
+    "system_default": QosProfile(None, None, None),
+    "services_default": QosProfile("reliable", "volatile", 10),
+    "parameters": QosProfile("reliable", "volatile", 1000),
+    "parameter_events": QosProfile("reliable", "volatile", 1000),
+}
+
+
+@dataclass(frozen=True)
+class QosRequest:
+    """What the user asked for on the command line (None: not given)."""
+
+    profile: str | None = None
+    reliability: str | None = None
+    durability: str | None = None
+    depth: int | None = None
+
+    @property
+    def given(self) -> bool:
+        return any(v is not None for v in (self.profile, self.reliability, self.durability, self.depth))
+
+    def base(self) -> QosProfile:
+        return PROFILES[self.profile or "default"]
+
+    def apply(self, profile: QosProfile) -> QosProfile:
+        """`profile` with every explicitly given policy replacing its own."""
+        changes: dict[str, Any] = {}
+        if self.reliability is not None:
+            changes["reliability"] = self.reliability
+        if self.durability is not None:
+            changes["durability"] = self.durability
+        if self.depth is not None:
+            changes["depth"] = self.depth
+        return replace(profile, **changes)
+
+
+def adapt_to_publishers(request: QosRequest, offered: list[QosProfile]) -> tuple[QosProfile, list[str]]:
+    """ros2cli's choice for echo/hz: reliable only when every publisher is, transient_local only when every
+    publisher is; explicitly requested policies win. Returns the profile and notes for the user."""
+    profile = request.base()
+    notes: list[str] = []
+    if offered:
+        reliable = sum(1 for q in offered if q.reliability == "reliable")
+        durable = sum(1 for q in offered if q.durability == "transient_local")
+        adapted = replace(
+            profile,
+            reliability="reliable" if reliable == len(offered) else "best_effort",
+            durability="transient_local" if durable == len(offered) else "volatile",
+        )
+        if 0 < reliable < len(offered) and request.reliability is None:
+            notes.append("some, but not all, publishers are offering reliable; subscribing best_effort")
+        if 0 < durable < len(offered) and request.durability is None:
+            notes.append("some, but not all, publishers are offering transient_local; subscribing volatile")
+        profile = adapted
+    return request.apply(profile), notes
+
+
+def to_dds_qos(profile: QosProfile, user_data: bytes | None = None) -> Any:
+    from cyclonedds.core import Policy, Qos
+    from cyclonedds.util import duration
+
+    policies: list[Any] = [
+        # plain CDR (XCDR1), as rmw_cyclonedds_cpp announces; XCDR2-only peers would not match otherwise
+        Policy.DataRepresentation(use_cdrv0_representation=True),
+        # rmw_cyclonedds_cpp never auto-disposes on unregister
+        Policy.WriterDataLifecycle(autodispose=False),
+    ]
+    if profile.reliability == "reliable":
+        policies.append(Policy.Reliability.Reliable(max_blocking_time=duration(seconds=1)))
+    elif profile.reliability == "best_effort":
+        policies.append(Policy.Reliability.BestEffort)
+    if profile.durability == "transient_local":
+        policies.append(Policy.Durability.TransientLocal)
+    elif profile.durability == "volatile":
+        policies.append(Policy.Durability.Volatile)
+    if profile.depth is not None:
+        keep_all = profile.depth == 0
+        policies.append(Policy.History.KeepAll if keep_all else Policy.History.KeepLast(profile.depth))
+    if user_data:
+        policies.append(Policy.Userdata(data=user_data))
+    return Qos(*policies)
+
+
+def from_dds_qos(qos: Any) -> QosProfile:
+    """The ROS 2 view of an endpoint's discovered QoS."""
+    from cyclonedds.core import Policy
+
+    reliability = qos[Policy.Reliability]
+    durability = qos[Policy.Durability]
+    history = qos[Policy.History]
+    rel = "best_effort" if reliability is Policy.Reliability.BestEffort else "reliable"
+    if durability is Policy.Durability.Volatile or durability is None:
+        dur = "volatile"
+    elif durability is Policy.Durability.TransientLocal:
+        dur = "transient_local"
+    else:
+        dur = str(getattr(durability, "__name__", durability)).lower()
+    depth = getattr(history, "depth", 0 if history is Policy.History.KeepAll else 1)
+    return QosProfile(rel, dur, int(depth))
+
+
+def user_data_of(qos: Any) -> bytes:
+    from cyclonedds.core import Policy
+
+    policy = qos[Policy.Userdata]
+    return bytes(policy.data) if policy is not None else b""
+
+
+# DDS QosPolicyId_t values (DDS 1.4, table 2.2.3), as in Cyclone's incompatible-QoS statuses.
+POLICY_NAMES = {
+    1: "USER_DATA", 2: "DURABILITY", 3: "PRESENTATION", 4: "DEADLINE", 5: "LATENCY_BUDGET",
+    6: "OWNERSHIP", 7: "OWNERSHIP_STRENGTH", 8: "LIVELINESS", 9: "TIME_BASED_FILTER", 10: "PARTITION",
+    11: "RELIABILITY", 12: "DESTINATION_ORDER", 13: "HISTORY", 14: "RESOURCE_LIMITS",
+    23: "DATA_REPRESENTATION", 24: "TYPE_CONSISTENCY_ENFORCEMENT",
+}  # fmt: skip
+
+
+class Participant:
+    """One DDS domain participant configured like an rmw_cyclonedds_cpp context."""
+
+    def __init__(self, env: Mapping[str, str] = os.environ) -> None:
+        from cyclonedds.core import DDSException, Policy, Qos
+        from cyclonedds.domain import Domain, DomainParticipant
+
+        self.domain_id = domain_id(env)
+        self.range = discovery_range(env)
+        config = cyclone_config(env)
+        try:
+            self._domain = Domain(self.domain_id, config) if config else None
+            self.dp = DomainParticipant(self.domain_id, qos=Qos(Policy.Userdata(data=b"enclave=/;")))
+        except DDSException as err:
+            hint = " (check CYCLONEDDS_URI)" if env.get("CYCLONEDDS_URI") else ""
+            raise RostoolError(f"cannot start DDS on domain {self.domain_id}: {err}{hint}") from err
+        self.guid: bytes = self.dp.guid.bytes
+
+    def close(self) -> None:
+        # Deleting the participant deletes its readers and writers; remote peers see them disposed.
+        from cyclonedds.core import DDSException
+
+        with contextlib.suppress(DDSException):
+            self.dp._delete(self.dp._ref)
+        self._domain = None

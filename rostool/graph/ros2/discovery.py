@@ -1,0 +1,290 @@
+"""The ROS 2 graph as rmw_dds_common's GraphCache sees it: DDS built-in topics plus `ros_discovery_info`.
+
+DCPSParticipant/DCPSPublication/DCPSSubscription give every participant, writer and reader (GUID, topic,
+type, QoS, USER_DATA). Nodes are not DDS entities: each ROS 2 context publishes one
+rmw_dds_common/msg/ParticipantEntitiesInfo on `ros_discovery_info` (reliable, transient-local, keep last
+1), listing its nodes and the GIDs of their readers and writers. A GID is the entity's 16-byte DDS GUID
+(zero-padded to 24 bytes up to Humble, where rmw_dds_common/msg/Gid was `char[24]`).
+"""
+
+from __future__ import annotations
+
+import struct
+import threading
+import time
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+from typing import Any
+
+from rostool.graph.ros2 import dds
+from rostool.graph.ros2.names import from_dds_topic, from_dds_type
+
+DISCOVERY_TOPIC = "ros_discovery_info"
+DISCOVERY_TYPE = "rmw_dds_common/msg/ParticipantEntitiesInfo"
+UNKNOWN_NODE = "_NODE_NAME_UNKNOWN_"  # what ros2cli prints for endpoints no node claims
+
+
+@dataclass
+class Endpoint:
+    guid: bytes
+    participant: bytes
+    dds_topic: str
+    dds_type: str
+    qos: dds.QosProfile
+    user_data: bytes
+    is_writer: bool
+
+    @property
+    def ros(self) -> tuple[str, str] | None:
+        return from_dds_topic(self.dds_topic)
+
+    @property
+    def type_name(self) -> str:
+        return from_dds_type(self.dds_type)
+
+    @property
+    def type_hash(self) -> str:
+        for part in self.user_data.decode("utf-8", "replace").split(";"):
+            if part.startswith("typehash="):
+                return part.removeprefix("typehash=")
+        return ""
+
+
+@dataclass
+class NodeEntry:
+    namespace: str
+    name: str
+    readers: list[bytes] = field(default_factory=list)
+    writers: list[bytes] = field(default_factory=list)
+
+    @property
+    def full_name(self) -> str:
+        return self.namespace.rstrip("/") + "/" + self.name
+
+
+# --- ParticipantEntitiesInfo CDR ---------------------------------------------------------------------
+
+
+def encode_entities_info(participant: bytes, nodes: Iterable[NodeEntry], gid_size: int) -> bytes:
+    """XCDR1 little endian, with the Gid layout of the distro (`gid_size` 16 or 24)."""
+    out = bytearray(b"\x00\x01\x00\x00")
+
+    def align(n: int) -> None:
+        out.extend(b"\0" * (-(len(out) - 4) % n))
+
+    def gid(value: bytes) -> None:
+        out.extend(value[:gid_size].ljust(gid_size, b"\0"))
+
+    def string(text: str) -> None:
+        data = text.encode() + b"\0"
+        align(4)
+        out.extend(struct.pack("<I", len(data)))
+        out.extend(data)
+
+    def gids(values: list[bytes]) -> None:
+        align(4)
+        out.extend(struct.pack("<I", len(values)))
+        for value in values:
+            gid(value)
+
+    gid(participant)
+    entries = list(nodes)
+    align(4)
+    out.extend(struct.pack("<I", len(entries)))
+    for node in entries:
+        string(node.namespace)
+        string(node.name)
+        gids(node.readers)
+        gids(node.writers)
+    align(4)
+    return bytes(out)
+
+
+def decode_entities_info(raw: bytes) -> tuple[bytes, list[NodeEntry]]:
+    """Participant GID and nodes; tries the Iron+ 16-byte GID first, then Humble's 24 bytes."""
+    for size in (16, 24):
+        try:
+            return _decode(raw, size)
+        except (ValueError, struct.error, UnicodeDecodeError):
+            continue
+    raise ValueError("not a ParticipantEntitiesInfo sample")
+
+
+def _decode(raw: bytes, gid_size: int) -> tuple[bytes, list[NodeEntry]]:
+    if len(raw) < 4 or raw[0] != 0 or raw[1] not in (0, 1):
+        raise ValueError("bad encapsulation")
+    order = "<" if raw[1] == 1 else ">"
+    pos = 4
+
+    def align(n: int) -> None:
+        nonlocal pos
+        pos += -(pos - 4) % n
+
+    def u32() -> int:
+        nonlocal pos
+        align(4)
+        (value,) = struct.unpack_from(order + "I", raw, pos)
+        pos += 4
+        return int(value)
+
+    def take(n: int) -> bytes:
+        nonlocal pos
+        if pos + n > len(raw):
+            raise ValueError("truncated")
+        data = raw[pos : pos + n]
+        pos += n
+        return data
+
+    def string() -> str:
+        length = u32()
+        if not 1 <= length <= 4096:
+            raise ValueError("bad string")
+        data = take(length)
+        if data[-1] != 0 or 0 in data[:-1]:
+            raise ValueError("bad string")
+        return data[:-1].decode()
+
+    def gids() -> list[bytes]:
+        count = u32()
+        if count > 100_000:
+            raise ValueError("bad count")
+        return [take(gid_size)[:16] for _ in range(count)]
+
+    participant = take(gid_size)[:16]
+    count = u32()
+    if count > 10_000:
+        raise ValueError("bad count")
+    nodes = []
+    for _ in range(count):
+        namespace, name = string(), string()
+        nodes.append(NodeEntry(namespace, name, gids(), gids()))
+    if len(raw) - pos > 7 or any(raw[pos:]):
+        raise ValueError("trailing bytes")
+    return participant, nodes
+
+
+# --- the cache ---------------------------------------------------------------------------------------
+
+
+class GraphCache:
+    """Everything discovered so far; `poll()` folds in new built-in and ros_discovery_info samples."""
+
+    def __init__(self, participant: dds.Participant, info_reader: Any) -> None:
+        from cyclonedds.builtin import (
+            BuiltinDataReader,
+            BuiltinTopicDcpsParticipant,
+            BuiltinTopicDcpsPublication,
+            BuiltinTopicDcpsSubscription,
+        )
+
+        self.own = participant.guid
+        self._lock = threading.RLock()
+        dp = participant.dp
+        self._participants_reader = BuiltinDataReader(dp, BuiltinTopicDcpsParticipant)
+        self._publications_reader = BuiltinDataReader(dp, BuiltinTopicDcpsPublication)
+        self._subscriptions_reader = BuiltinDataReader(dp, BuiltinTopicDcpsSubscription)
+        self._info_reader = info_reader
+        self.participants: dict[bytes, bytes] = {}  # GUID -> USER_DATA
+        self.endpoints: dict[bytes, Endpoint] = {}
+        self.nodes: dict[bytes, list[NodeEntry]] = {}  # participant GUID -> its nodes
+        self.started = time.monotonic()
+        self.changed = self.started
+
+    def poll(self) -> bool:
+        from cyclonedds.core import InstanceState
+
+        changed = False
+        with self._lock:
+            for sample in self._take(self._participants_reader):
+                key = sample.key.bytes
+                if sample.sample_info.instance_state != InstanceState.Alive:
+                    changed |= self.participants.pop(key, None) is not None
+                    self.nodes.pop(key, None)
+                    continue
+                if key not in self.participants:
+                    changed = True
+                self.participants[key] = dds.user_data_of(sample.qos) if sample.qos is not None else b""
+            for reader, is_writer in ((self._publications_reader, True), (self._subscriptions_reader, False)):
+                for sample in self._take(reader):
+                    key = sample.key.bytes
+                    if sample.sample_info.instance_state != InstanceState.Alive:
+                        changed |= self.endpoints.pop(key, None) is not None
+                        continue
+                    if key in self.endpoints or sample.qos is None:
+                        continue
+                    self.endpoints[key] = Endpoint(
+                        key, sample.participant_key.bytes, sample.topic_name, sample.type_name,
+                        dds.from_dds_qos(sample.qos), dds.user_data_of(sample.qos), is_writer,
+                    )  # fmt: skip
+                    changed = True
+            changed |= self._poll_info()
+            if changed:
+                self.changed = time.monotonic()
+        return changed
+
+    def _poll_info(self) -> bool:
+        from cyclonedds._clayer import ddspy_take  # type: ignore[import-not-found]
+        from cyclonedds.core import InstanceState, SampleState, ViewState
+
+        mask = SampleState.Any | ViewState.Any | InstanceState.Any
+        changed = False
+        while True:
+            samples = ddspy_take(self._info_reader._ref, mask, 64)
+            if isinstance(samples, int) or not samples:
+                return changed
+            for data, info in samples:
+                if not info.valid_data:
+                    continue
+                try:
+                    participant, nodes = decode_entities_info(data)
+                except ValueError:
+                    continue
+                if participant != self.own:
+                    self.nodes[participant] = nodes
+                    changed = True
+
+    @staticmethod
+    def _take(reader: Any) -> list[Any]:
+        found: list[Any] = []
+        while True:
+            batch = reader.take(N=256)
+            if not batch:
+                return found
+            found.extend(batch)
+
+    def settle(self, minimum: float = 0.5, quiet: float = 0.3, maximum: float = 3.0) -> bool:
+        """Wait until discovery has been quiet for a while; True when any other participant was found."""
+        while True:
+            self.poll()
+            now = time.monotonic()
+            elapsed = now - self.started
+            remote = any(key != self.own for key in self.participants)
+            if elapsed >= maximum or (remote and elapsed >= minimum and now - self.changed >= quiet):
+                return remote
+            time.sleep(0.05)
+
+    # --- queries ---------------------------------------------------------------------------------
+    def remote_endpoints(self) -> list[Endpoint]:
+        with self._lock:
+            return [e for e in self.endpoints.values() if e.participant != self.own]
+
+    def node_of(self) -> dict[bytes, str]:
+        """Endpoint GUID -> node full name, for every node announced by a live participant."""
+        owners: dict[bytes, str] = {}
+        with self._lock:
+            for participant, nodes in self.nodes.items():
+                if participant not in self.participants:
+                    continue
+                for node in nodes:
+                    for gid in (*node.readers, *node.writers):
+                        owners[gid] = node.full_name
+        return owners
+
+    def node_entries(self) -> list[NodeEntry]:
+        with self._lock:
+            return [
+                node
+                for participant, nodes in self.nodes.items()
+                if participant in self.participants and participant != self.own
+                for node in nodes
+            ]

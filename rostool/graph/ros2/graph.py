@@ -1,0 +1,492 @@
+"""The Graph interface over DDS: ROS 2 topics, nodes and QoS the way rmw_cyclonedds_cpp puts them on the wire.
+
+The DDS participant starts on first need. It announces one node, `/rostool_<pid>`, on ros_discovery_info
+(so ROS 2 tools list it like any node) with the readers and writers it creates. Samples are moved as raw
+CDR bytes (`ddspy_write` / `ddspy_take`, the calls cyclonedds' own DataWriter/DataReader make after
+serializing), so what goes out and what comes in is exactly rosbags' CDR, byte for byte.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import replace
+from typing import Any, Literal
+
+from rostool.errors import RostoolError
+from rostool.graph.base import NodeInfo, Publisher, Received, Subscription, TopicInfo
+from rostool.graph.ros2 import dds
+from rostool.graph.ros2.discovery import (
+    DISCOVERY_TOPIC,
+    DISCOVERY_TYPE,
+    UNKNOWN_NODE,
+    Endpoint,
+    GraphCache,
+    NodeEntry,
+    encode_entities_info,
+)
+from rostool.graph.ros2.names import resolve, service_type, topic_to_dds, type_to_dds
+from rostool.graph.ros2.types import TypeSupport, distro_from_env, gid_size
+
+SETTLE_MAX_SECONDS = 3.0  # listing verbs: how long an empty graph is given before "no participants"
+TOPIC_WAIT_SECONDS = 1.5
+READER_CACHE_DEPTH = 1000  # echo/hz/pub: how long to look for a topic before warning it is not there yet
+_ANY_SAMPLE = 0x7F  # SampleState.Any | ViewState.Any | InstanceState.Any (DDS mask bits)
+
+
+class Session:
+    """One DDS participant with rmw_dds_common's graph machinery."""
+
+    def __init__(self, node_name: str, types: TypeSupport) -> None:
+        from cyclonedds.core import Policy, Qos
+        from cyclonedds.pub import DataWriter
+        from cyclonedds.sub import DataReader
+        from cyclonedds.topic import Topic
+
+        self.types = types
+        self.participant = dds.Participant()
+        self.node = NodeEntry("/", node_name)
+        self._lock = threading.RLock()
+        self._topics: dict[str, Any] = {}
+        self._keep: list[Any] = []
+        info_cls = types.idl_class(DISCOVERY_TYPE)
+        info_topic: Any = Topic(self.participant.dp, DISCOVERY_TOPIC, info_cls)
+        user_data = types.user_data(DISCOVERY_TYPE)
+        graph_qos = dds.QosProfile("reliable", "transient_local", 1)
+        writer_qos = dds.to_dds_qos(graph_qos, user_data)
+        reader_qos = dds.to_dds_qos(dds.QosProfile("reliable", "transient_local", 0), user_data)
+        self._info_writer = DataWriter(self.participant.dp, info_topic, qos=writer_qos)
+        self._info_reader = DataReader(
+            self.participant.dp, info_topic, qos=Qos(*reader_qos.policies, Policy.IgnoreLocal.Participant)
+        )
+        self.cache = GraphCache(self.participant, self._info_reader)
+        self.announce()
+
+    def announce(self) -> None:
+        from cyclonedds._clayer import ddspy_write  # type: ignore[import-not-found]
+
+        payload = encode_entities_info(self.participant.guid, [self.node], gid_size(self.types.distro))
+        ddspy_write(self._info_writer._ref, payload)
+
+    def topic(self, dds_name: str, store_name: str, request_header: bool = False) -> Any:
+        from cyclonedds.core import DDSException
+        from cyclonedds.topic import Topic
+
+        with self._lock:
+            found = self._topics.get(dds_name)
+            if found is not None:
+                if found[1] != store_name:
+                    raise RostoolError(f"this process already uses {dds_name} with type {found[1]}")
+                return found[0]
+            try:
+                data_type = self.types.idl_class(store_name, request_header)
+                created: Any = Topic(self.participant.dp, dds_name, data_type)
+            except DDSException as err:
+                where = f"{dds_name} ({type_to_dds(store_name)})"
+                raise RostoolError(f"cannot create DDS topic {where}: {err}") from err
+            self._topics[dds_name] = (created, store_name)
+            return created
+
+    def writer(
+        self, dds_name: str, store_name: str, profile: dds.QosProfile, request_header: bool = False
+    ) -> Any:
+        from cyclonedds.pub import DataWriter
+
+        writer = DataWriter(
+            self.participant.dp, self.topic(dds_name, store_name, request_header),
+            qos=dds.to_dds_qos(profile, self.types.user_data(store_name)),
+        )  # fmt: skip
+        with self._lock:
+            self.node.writers.append(writer.guid.bytes)
+            self.announce()
+        return writer
+
+    def reader(
+        self, dds_name: str, store_name: str, profile: dds.QosProfile, request_header: bool = False
+    ) -> Any:
+        from cyclonedds.sub import DataReader
+
+        reader = DataReader(
+            self.participant.dp, self.topic(dds_name, store_name, request_header),
+            qos=dds.to_dds_qos(profile, self.types.user_data(store_name)),
+        )  # fmt: skip
+        with self._lock:
+            self.node.readers.append(reader.guid.bytes)
+            self.announce()
+        return reader
+
+    def close(self) -> None:
+        self.participant.close()
+
+
+class Ros2Graph:
+    """Read-only verbs wait for discovery to settle; subscribing and publishing add DDS endpoints."""
+
+    ros_version = 2
+    time_style: Literal["ros1", "ros2"] = "ros2"
+
+    def __init__(self, node_name: str = "rostool", distro: str | None = None, anonymous: bool = True) -> None:
+        dds.domain_id()  # a bad ROS_DOMAIN_ID fails before anything starts
+        dds.discovery_range()
+        self.types = TypeSupport(distro or distro_from_env())
+        self.qos_request = dds.QosRequest()
+        self.warn: Callable[[str], None] = lambda text: print(f"WARNING: {text}", file=sys.stderr)
+        base = node_name.strip("/")
+        self._node_name = f"{base}_{os.getpid()}" if anonymous else base
+        self._session: Session | None = None
+        self._lock = threading.Lock()
+        self._subscriptions: list[_Subscription] = []
+
+    @property
+    def session(self) -> Session:
+        with self._lock:
+            if self._session is None:
+                self._session = Session(self._node_name, self.types)
+            return self._session
+
+    @property
+    def node_name(self) -> str:
+        return "/" + self._node_name
+
+    def __enter__(self) -> Ros2Graph:
+        return self
+
+    def __exit__(self, *_exc: object) -> None:
+        self.close()
+
+    def close(self) -> None:
+        for sub in self._subscriptions:
+            sub.close()
+        self._subscriptions.clear()
+        if self._session is not None:
+            self._session.close()
+            self._session = None
+
+    def resolve(self, name: str) -> str:
+        return resolve(name)
+
+    # --- discovery ----------------------------------------------------------------------------
+    def _settled(self, require_peers: bool) -> GraphCache:
+        cache = self.session.cache
+        found = cache.settle(maximum=SETTLE_MAX_SECONDS)
+        if require_peers and not found:
+            participant = self.session.participant
+            raise RostoolError(
+                f"no ROS 2 participants found on domain {participant.domain_id} within "
+                f"{SETTLE_MAX_SECONDS:g} s ({participant.range} discovery): is anything running with this "
+                "ROS_DOMAIN_ID? Nodes on other machines need ROS_AUTOMATIC_DISCOVERY_RANGE=SUBNET"
+            )
+        return cache
+
+    def _owners(self, cache: GraphCache) -> dict[bytes, str]:
+        return cache.node_of()
+
+    # --- nodes --------------------------------------------------------------------------------
+    def node_names(self) -> list[str]:
+        cache = self._settled(require_peers=True)
+        return sorted({node.full_name for node in cache.node_entries()})
+
+    def node_uri(self, name: str) -> str:
+        cache = self._settled(require_peers=True)
+        resolved = resolve(name)
+        with cache._lock:
+            for participant, nodes in cache.nodes.items():
+                if participant in cache.participants and any(n.full_name == resolved for n in nodes):
+                    return "dds:" + participant.hex()
+        raise RostoolError(f"unknown node {resolved}: no ROS 2 participant announces it")
+
+    def node_info(self, name: str) -> NodeInfo:
+        resolved = resolve(name)
+        uri = self.node_uri(resolved)
+        cache = self.session.cache
+        owners = self._owners(cache)
+        pubs: set[tuple[str, str]] = set()
+        subs: set[tuple[str, str]] = set()
+        servers: set[tuple[str, str]] = set()
+        clients: set[tuple[str, str]] = set()
+        for endpoint in cache.remote_endpoints():
+            ros = endpoint.ros
+            if ros is None or owners.get(endpoint.guid) != resolved:
+                continue
+            kind, ros_name = ros
+            if kind == "topic":
+                (pubs if endpoint.is_writer else subs).add((ros_name, endpoint.type_name))
+            elif kind == "request":
+                target = clients if endpoint.is_writer else servers
+                target.add((ros_name, service_type(endpoint.type_name)))
+        info = NodeInfo(resolved, uri, None, sorted(pubs), sorted(subs), sorted(s for s, _ in servers), [])
+        info.service_types = dict(servers)
+        info.service_clients = sorted(clients)
+        return info
+
+    def ping(self, name: str) -> float:
+        raise RostoolError("ROS 2 nodes cannot be pinged (there is no node API); try `rostool node info`")
+
+    def kill(self, name: str) -> None:
+        raise RostoolError("ROS 2 nodes cannot be killed remotely (there is no node API); stop the process")
+
+    # --- topics -------------------------------------------------------------------------------
+    def topics(self) -> list[TopicInfo]:
+        cache = self._settled(require_peers=True)
+        owners = self._owners(cache)
+        found: dict[str, TopicInfo] = {}
+        for endpoint in sorted(cache.remote_endpoints(), key=lambda e: not e.is_writer):
+            ros = endpoint.ros
+            if ros is None or ros[0] != "topic":
+                continue
+            info = found.setdefault(ros[1], TopicInfo(ros[1], endpoint.type_name))
+            node = owners.get(endpoint.guid, UNKNOWN_NODE)
+            (info.publishers if endpoint.is_writer else info.subscribers).append(node)
+        for info in found.values():
+            info.publishers.sort()
+            info.subscribers.sort()
+        return [found[name] for name in sorted(found)]
+
+    def topic_endpoints(self, name: str) -> list[dict[str, Any]]:
+        """Every remote reader and writer of a topic with its node, type, GID and QoS (topic info -v)."""
+        resolved = resolve(name)
+        cache = self._settled(require_peers=True)
+        owners = self._owners(cache)
+        rows = []
+        for endpoint in cache.remote_endpoints():
+            if endpoint.ros != ("topic", resolved):
+                continue
+            node = owners.get(endpoint.guid, UNKNOWN_NODE)
+            rows.append({
+                "node": node, "endpoint_type": "PUBLISHER" if endpoint.is_writer else "SUBSCRIPTION",
+                "type": endpoint.type_name, "type_hash": endpoint.type_hash, "gid": endpoint.guid.hex("."),
+                "qos": vars(endpoint.qos).copy(),
+            })  # fmt: skip
+        return sorted(rows, key=lambda r: (r["endpoint_type"] != "PUBLISHER", r["node"]))
+
+    def topic_type(self, name: str) -> str | None:
+        resolved = resolve(name)
+        cache = self.session.cache
+        cache.settle(maximum=TOPIC_WAIT_SECONDS)
+        endpoints = [e for e in cache.remote_endpoints() if e.ros == ("topic", resolved)]
+        endpoints.sort(key=lambda e: not e.is_writer)
+        return endpoints[0].type_name if endpoints else None
+
+    def subscribe(
+        self,
+        topic: str,
+        on_message: Callable[[Received], None],
+        on_error: Callable[[str], None] | None = None,
+    ) -> Subscription:
+        _ = self.session  # started here, not in the subscription thread
+        sub = _Subscription(self, resolve(topic), on_message, on_error or self.warn)
+        self._subscriptions.append(sub)
+        return sub
+
+    def publisher(self, topic: str, type_name: str, latch: bool = False) -> Publisher:
+        resolved = resolve(topic)
+        store_name = self.types.store_name(type_name)
+        existing = self.topic_type(resolved)
+        if existing and existing != store_name:
+            raise RostoolError(
+                f"topic {resolved} already has type {existing}; cannot publish {store_name} on it"
+            )
+        request = self.qos_request
+        base = request.base()
+        if latch and request.durability is None:
+            base = dds.QosProfile(base.reliability, "transient_local", base.depth)
+        profile = request.apply(base)
+        writer = self.session.writer(topic_to_dds(resolved), store_name, profile)
+        return _Publisher(resolved, store_name, writer, self.types)
+
+    # --- services -----------------------------------------------------------------------------
+    def services(self) -> list[tuple[str, str, list[str]]]:
+        """(name, type, server nodes) of every service: a server reads `rq/<name>Request`."""
+        cache = self._settled(require_peers=True)
+        owners = self._owners(cache)
+        found: dict[str, tuple[str, list[str]]] = {}
+        for endpoint in cache.remote_endpoints():
+            ros = endpoint.ros
+            if ros is None or ros[0] != "request" or endpoint.is_writer:
+                continue
+            entry = found.setdefault(ros[1], (service_type(endpoint.type_name), []))
+            entry[1].append(owners.get(endpoint.guid, UNKNOWN_NODE))
+        return [(name, found[name][0], sorted(found[name][1])) for name in sorted(found)]
+
+    def call_service(self, service: str, srv_type: str, request: Any, timeout: float = 5.0) -> Any:
+        """Call a service (rmw_cyclonedds_cpp's request/reply convention) with a request mapping."""
+        from rostool.graph.ros2.services import ServiceClient
+
+        client = ServiceClient(self.session, resolve(service), srv_type)
+        message = self.build_message(client.request_type, request)
+        return client.call(message, timeout)
+
+    def message_class(self, type_name: str) -> type:
+        return self.types.store.types[self.types.store_name(type_name)]  # type: ignore[no-any-return]
+
+    def build_message(self, type_name: str, value: Any) -> Any:
+        from rostool.interfaces.fill import build_message
+
+        return build_message(self.types.store, self.types.store_name(type_name), value)
+
+    # --- parameters ---------------------------------------------------------------------------
+    def _no_params(self) -> RostoolError:
+        return RostoolError(
+            "ROS 2 parameters belong to nodes: use `rostool param list|get|set|describe NODE ...` "
+            "(delete, dump and load are ROS 1 forms)"
+        )
+
+    def param_names(self) -> list[str]:
+        raise self._no_params()
+
+    def get_param(self, name: str) -> Any:
+        raise self._no_params()
+
+    def set_param(self, name: str, value: Any) -> None:
+        raise self._no_params()
+
+    def delete_param(self, name: str) -> None:
+        raise self._no_params()
+
+    def has_param(self, name: str) -> bool:
+        raise self._no_params()
+
+
+class _Publisher:
+    def __init__(self, topic: str, store_name: str, writer: Any, types: TypeSupport) -> None:
+        self.topic = topic
+        self.type_name = store_name
+        self._writer = writer
+        self._ref = writer._ref
+        self._types = types
+
+    def publish(self, message: object) -> None:
+        self.publish_raw(self._types.serialize(message, self.type_name))
+
+    def publish_raw(self, payload: bytes) -> None:
+        """Write CDR bytes (with their 4-byte encapsulation header) as they are."""
+        from cyclonedds._clayer import ddspy_write  # type: ignore[import-not-found]
+
+        result = ddspy_write(self._ref, payload)
+        if result < 0:
+            raise RostoolError(f"DDS write on {self.topic} failed (code {result})")
+
+    def wait_for_subscribers(self, count: int, timeout: float) -> bool:
+        deadline = time.monotonic() + timeout
+        while self.subscriber_count < count:
+            if time.monotonic() >= deadline:
+                return False
+            time.sleep(0.02)
+        return True
+
+    @property
+    def subscriber_count(self) -> int:
+        return int(self._writer.get_publication_matched_status().current_count)
+
+
+class _Subscription:
+    """Waits (in its own thread) for the topic's type to be known, then reads raw samples as they come."""
+
+    def __init__(
+        self,
+        graph: Ros2Graph,
+        topic: str,
+        on_message: Callable[[Received], None],
+        on_error: Callable[[str], None],
+    ) -> None:
+        self._graph = graph
+        self._topic = topic
+        self._on_message = on_message
+        self._on_error = on_error
+        self._closed = threading.Event()
+        self._waitset: Any = None
+        self._thread = threading.Thread(target=self._run, name=f"ros2 sub {topic}", daemon=True)
+        self._thread.start()
+
+    def close(self) -> None:
+        self._closed.set()
+        waitset = self._waitset
+        if waitset is not None:
+            waitset.set_trigger(True)
+        if threading.current_thread() is not self._thread:
+            self._thread.join(2.0)
+
+    def _run(self) -> None:
+        try:
+            chosen = self._wait_for_type()
+            if chosen is not None:
+                self._read(*chosen)
+        except RostoolError as err:
+            self._on_error(str(err))
+
+    def _publishers(self) -> list[Endpoint]:
+        cache = self._graph.session.cache
+        cache.poll()
+        return [e for e in cache.remote_endpoints() if e.ros == ("topic", self._topic)]
+
+    def _wait_for_type(self) -> tuple[str, dds.QosProfile] | None:
+        graph = self._graph
+        cache = graph.session.cache
+        while not self._closed.is_set():
+            endpoints = self._publishers()
+            writers = [e for e in endpoints if e.is_writer]
+            known = writers or endpoints
+            settled = time.monotonic() - cache.started >= 0.5
+            if known and (writers or settled):
+                type_name = known[0].type_name
+                if not graph.types.knows(type_name):
+                    graph.types.store_name(type_name)  # raises the "unknown type" error
+                profile, notes = dds.adapt_to_publishers(graph.qos_request, [w.qos for w in writers])
+                for note in notes:
+                    graph.warn(note)
+                return type_name, profile
+            self._closed.wait(0.05)
+        return None
+
+    def _read(self, store_name: str, profile: dds.QosProfile) -> None:
+        from cyclonedds._clayer import ddspy_take  # type: ignore[import-not-found]
+        from cyclonedds.core import ReadCondition, WaitSet
+        from cyclonedds.util import duration
+
+        graph = self._graph
+        cache_profile = profile
+        if graph.qos_request.depth is None and profile.depth:
+            # A reader's depth is local (it never affects matching): a deep cache lets a busy moment pass
+            # without losing samples a reliable publisher already delivered.
+            cache_profile = replace(profile, depth=max(profile.depth, READER_CACHE_DEPTH))
+        reader = graph.session.reader(topic_to_dds(self._topic), store_name, cache_profile)
+        waitset = WaitSet(graph.session.participant.dp)
+        waitset.attach(ReadCondition(reader, _ANY_SAMPLE))
+        self._waitset = waitset
+        types, topic, deliver, clock = graph.types, self._topic, self._on_message, time.time_ns
+        store = types.store
+
+        def decode(payload: bytes) -> Any:
+            return store.deserialize_cdr(payload, store_name)
+
+        ref = reader._ref
+        reported = 0
+        next_check = 0.0
+        while not self._closed.is_set():
+            waitset.wait(duration(milliseconds=250))
+            while True:
+                samples = ddspy_take(ref, _ANY_SAMPLE, 512)
+                if isinstance(samples, int) or not samples:
+                    break
+                for data, info in samples:
+                    if info.valid_data:
+                        deliver(Received(topic, data, clock(), store_name, decode))
+            now = time.monotonic()
+            if now >= next_check:
+                next_check = now + 0.5
+                status = reader.get_requested_incompatible_qos_status()
+                if status.total_count > reported:
+                    reported = status.total_count
+                    self._on_error(self._incompatible(status.last_policy_id, profile))
+
+    def _incompatible(self, policy_id: int, profile: dds.QosProfile) -> str:
+        policy = dds.POLICY_NAMES.get(policy_id, f"policy {policy_id}")
+        offered = sorted({w.qos.describe() for w in self._publishers() if w.is_writer})
+        return (
+            f"a publisher of {self._topic} offers QoS incompatible with this subscription "
+            f"({profile.describe()}): incompatible policy {policy}; publishers offer "
+            f"{'; '.join(offered) or 'unknown'} (adjust --qos-reliability / --qos-durability)"
+        )

@@ -1,0 +1,167 @@
+"""ROS 2 message types: rosbags' distro store for the bytes, dynamic IDL classes for the DDS registration.
+
+Payload bytes always come from rosbags' CDR (de)serializer (XCDR1, 4-byte encapsulation header), the same
+bytes an rmw writes and rosbag2 stores. Cyclone still needs a registered type to create a topic: an
+IdlStruct class is built from the rosbags definition with the name rmw uses (`pkg::msg::dds_::Type_`),
+final extensibility and the member mapping rmw_cyclonedds_cpp's dyntype.cpp uses (ROS `char` and `byte`
+are uint8, bounded strings keep their bound), so the XTypes type information Cyclone announces matches
+the one a real ROS 2 node announces and type-aware matching succeeds. The class is only a type
+description: samples are never converted to or from it.
+"""
+
+from __future__ import annotations
+
+import os
+import threading
+import types as pytypes
+from collections.abc import Mapping
+from inspect import get_annotations
+from typing import Any
+
+from rosbags.interfaces import Nodetype
+
+from rostool.bag.typestores import DEFAULT_DISTRO, DISTROS, builtin_store
+from rostool.errors import RostoolError
+from rostool.graph.ros2.names import type_to_dds
+from rostool.interfaces.names import to_store_name
+
+# Distros whose nodes put a type hash (REP 2016) into endpoint USER_DATA.
+_TYPE_HASH_DISTROS = ("iron", "jazzy", "kilted")
+
+
+def distro_from_env(env: Mapping[str, str] = os.environ) -> str:
+    """ROS_DISTRO when rostool knows it, else the default distro."""
+    distro = env.get("ROS_DISTRO", "").strip().lower()
+    return distro if distro in DISTROS else DEFAULT_DISTRO
+
+
+def gid_size(distro: str) -> int:
+    """rmw_dds_common/msg/Gid is 24 bytes up to Humble, 16 from Iron on."""
+    return 24 if distro in ("foxy", "galactic", "humble") else 16
+
+
+class TypeSupport:
+    """Types of one ROS 2 graph session: the distro store plus types registered at run time."""
+
+    def __init__(self, distro: str = DEFAULT_DISTRO) -> None:
+        self.distro = distro
+        self.store = builtin_store(distro)
+        self._classes: dict[str, type] = {}
+        self._lock = threading.Lock()
+
+    def store_name(self, name: str) -> str:
+        """`pkg/Type` or `pkg/msg/Type` -> the store's `pkg/msg/Type`; a clear error when unknown."""
+        store_name = to_store_name(name.strip())
+        if store_name not in self.store.fielddefs:
+            known = ", ".join(DISTROS)
+            raise RostoolError(
+                f"unknown message type {name!r}: searched rosbags' built-in ROS 2 {self.distro} type store "
+                f"(set ROS_DISTRO to one of {known} for another distro's types)"
+            )
+        return store_name
+
+    def knows(self, store_name: str) -> bool:
+        return store_name in self.store.fielddefs
+
+    def register(self, typs: Mapping[str, Any]) -> None:
+        """Add definitions (rosbags' `{name: (consts, fields)}`), e.g. ones a bag stores."""
+        missing = {k: v for k, v in typs.items() if k not in self.store.fielddefs}
+        if missing:
+            self.store.register(missing)
+
+    def type_hash(self, store_name: str) -> str | None:
+        if self.distro not in _TYPE_HASH_DISTROS:
+            return None
+        try:
+            return str(self.store.hash_rihs01(store_name))
+        except Exception:  # a definition rosbags cannot hash: announce none, as Humble does
+            return None
+
+    def user_data(self, store_name: str) -> bytes | None:
+        digest = self.type_hash(store_name)
+        return f"typehash={digest};".encode() if digest else None
+
+    def serialize(self, message: object, store_name: str) -> bytes:
+        raw = bytes(self.store.serialize_cdr(message, store_name))
+        # Pad to 4 bytes like rmw writers (and as the RTPS payload would be anyway).
+        return raw + b"\0" * (-len(raw) % 4)
+
+    def deserialize(self, raw: bytes | memoryview, store_name: str) -> Any:
+        return self.store.deserialize_cdr(bytes(raw), store_name)
+
+    def idl_class(self, store_name: str, request_header: bool = False) -> type:
+        """The DDS type for `store_name`; with `request_header`, for service requests and replies."""
+        with self._lock:
+            if not request_header:
+                return self._idl_class(store_name)
+            key = store_name + "#request_header"
+            found = self._classes.get(key)
+            if found is None:
+                found = self._classes[key] = self._with_request_header(store_name)
+            return found
+
+    def _with_request_header(self, store_name: str) -> type:
+        """Service samples start with rmw_cyclonedds_cpp's 16-byte header (uint64 guid, int64 seq), and
+        cyclonedds-python validates every written and received sample against the topic's XTypes type
+        (it cannot create a topic without one). So service types get the header as two leading members.
+        rmw_cyclonedds_cpp announces its request/reply types without them; peers that announce no type
+        information match by type name, peers that announce it (recent dyntype-based releases) do not."""
+        from cyclonedds.idl import types as t
+
+        plain = self._idl_class(store_name)
+        header = {"rmw_request_guid": t.uint64, "rmw_request_seq": t.int64}
+        return self._make_class(store_name, header | dict(get_annotations(plain)))
+
+    def _idl_class(self, store_name: str) -> type:
+        found = self._classes.get(store_name)
+        if found is not None:
+            return found
+        _consts, fields = self.store.fielddefs[store_name]
+        cls = self._make_class(store_name, {name: self._field_type(desc) for name, desc in fields})
+        self._classes[store_name] = cls
+        return cls
+
+    @staticmethod
+    def _make_class(store_name: str, annotations: dict[str, Any]) -> type:
+        from cyclonedds.idl import IdlStruct
+        from cyclonedds.idl.annotations import final
+
+        def body(namespace: dict[str, Any]) -> None:
+            namespace["__annotations__"].update(annotations)
+
+        cls = pytypes.new_class(
+            store_name.replace("/", "_"), (IdlStruct,), {"typename": type_to_dds(store_name)}, body
+        )
+        final(cls)
+        return cls
+
+    def _field_type(self, desc: Any) -> Any:
+        from cyclonedds.idl import types as t
+
+        kind, args = desc
+        if kind == Nodetype.BASE:
+            prim, bound = args
+            if prim in ("string", "wstring"):  # cyclonedds-python has no wide strings; rare in ROS
+                return t.bounded_str[bound] if bound else str  # type: ignore[misc]
+            return _primitive(prim)
+        if kind == Nodetype.NAME:
+            return self._idl_class(args)
+        element, length = args
+        inner = self._field_type(element)
+        if kind == Nodetype.ARRAY:
+            return t.array[inner, length]  # type: ignore[misc]
+        return t.sequence[inner, length] if length else t.sequence[inner]  # type: ignore[misc]
+
+
+def _primitive(prim: str) -> Any:
+    from cyclonedds.idl import types as t
+
+    table: dict[str, Any] = {
+        "bool": bool, "byte": t.uint8, "char": t.uint8, "octet": t.uint8, "uint8": t.uint8,
+        "int8": t.int8, "int16": t.int16, "uint16": t.uint16, "int32": t.int32, "uint32": t.uint32,
+        "int64": t.int64, "uint64": t.uint64, "float32": t.float32, "float64": t.float64,
+    }  # fmt: skip
+    try:
+        return table[prim]
+    except KeyError as err:
+        raise RostoolError(f"message field type {prim!r} has no DDS mapping in rostool") from err

@@ -1,0 +1,139 @@
+"""ROS 2 services and parameters over rmw_cyclonedds_cpp's request/reply convention.
+
+The peer is a small ROS 2 node built on rostool's own library (DEMO_NODE below): it serves the four
+rcl_interfaces parameter services of a node `/demo` and example_interfaces/AddTwoInts on `/add_two_ints`.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from collections.abc import Iterator
+
+import pytest
+
+from tests.support import rostool
+from tests.test_ros2_graph import ros2_env
+
+DEMO_NODE = r"""
+import sys
+from rostool.graph.ros2 import params as P
+from rostool.graph.ros2.graph import Ros2Graph
+from rostool.graph.ros2.services import ServiceServer
+from rostool.interfaces.fill import build_message
+
+graph = Ros2Graph("demo", anonymous=False)
+session, store = graph.session, graph.types.store
+values = {"use_sim_time": False, "speed": 1.5, "robot_name": "r2", "wheels": 4, "tags": ["a", "b"]}
+read_only = {"wheels"}
+
+def reply(srv, fields):
+    return build_message(store, f"rcl_interfaces/srv/{srv}_Response", fields)
+
+def list_parameters(request):
+    return reply("ListParameters", {"result": {"names": sorted(values)}})
+
+def get_parameters(request):
+    found = [P.value_fields(values[n]) if n in values else {"type": 0} for n in request.names]
+    return reply("GetParameters", {"values": found})
+
+def set_parameters(request):
+    results = []
+    for parameter in request.parameters:
+        if parameter.name in read_only:
+            results.append({"successful": False, "reason": "parameter is read only"})
+        else:
+            values[parameter.name] = P.to_python(parameter.value)
+            results.append({"successful": True})
+    return reply("SetParameters", {"results": results})
+
+def describe_parameters(request):
+    return reply("DescribeParameters", {"descriptors": [
+        {"name": n, "type": P.type_of(values[n]), "description": f"the {n}", "read_only": n in read_only}
+        for n in request.names]})
+
+def add_two_ints(request):
+    return build_message(store, "example_interfaces/srv/AddTwoInts_Response", {"sum": request.a + request.b})
+
+servers = [
+    ServiceServer(session, f"/demo/{name}", "rcl_interfaces/srv/" + name.title().replace("_", ""), handler)
+    for name, handler in (("list_parameters", list_parameters), ("get_parameters", get_parameters),
+                          ("set_parameters", set_parameters), ("describe_parameters", describe_parameters))
+]
+servers.append(ServiceServer(session, "/add_two_ints", "example_interfaces/srv/AddTwoInts", add_two_ints))
+print("ready", flush=True)
+sys.stdin.read()
+for server in servers:
+    server.close()
+graph.close()
+"""
+
+# Calls /add_two_ints through rostool's library and prints the sum (a second process as the client).
+CALL_ADD = r"""
+import sys
+from rostool.graph.ros2.graph import Ros2Graph
+with Ros2Graph() as graph:
+    print(graph.call_service("/add_two_ints", "example_interfaces/srv/AddTwoInts", {"a": 40, "b": 2}).sum)
+    print(graph.services())
+"""
+
+
+@pytest.fixture
+def demo() -> Iterator[dict[str, str]]:
+    env = ros2_env()
+    proc = subprocess.Popen(
+        [sys.executable, "-c", DEMO_NODE], env=env, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    assert proc.stdout is not None
+    assert proc.stdout.readline() == "ready\n", proc.stderr.read() if proc.stderr else ""
+    yield env
+    proc.communicate(input="", timeout=20)
+
+
+def test_param_list_get_set_describe(demo: dict[str, str]) -> None:
+    listed = rostool(["param", "list", "/demo"], demo)
+    assert listed.stdout.splitlines() == ["  robot_name", "  speed", "  tags", "  use_sim_time", "  wheels"]
+    assert rostool(["param", "get", "/demo", "speed"], demo).stdout == "Double value is: 1.5\n"
+    assert rostool(["param", "get", "/demo", "robot_name"], demo).stdout == "String value is: r2\n"
+    assert json.loads(rostool(["param", "get", "/demo", "tags", "--json"], demo).stdout) == ["a", "b"]
+
+    changed = rostool(["param", "set", "/demo", "speed", "2.25"], demo)
+    assert changed.stdout == "Set parameter successful\n", changed.stderr
+    assert rostool(["param", "get", "/demo", "speed"], demo).stdout == "Double value is: 2.25\n"
+    refused = rostool(["param", "set", "/demo", "wheels", "6"], demo)
+    assert refused.returncode == 1
+    assert "setting parameter wheels on /demo failed: parameter is read only" in refused.stderr
+    missing = rostool(["param", "get", "/demo", "nope"], demo)
+    assert missing.returncode == 1 and "parameter nope is not set on node /demo" in missing.stderr
+
+    described = rostool(["param", "describe", "/demo", "wheels"], demo).stdout
+    assert described.splitlines() == [
+        "Parameter name: wheels", "  Type: integer", "  Description: the wheels", "  Constraints:",
+        "    Read only: true",
+    ]  # fmt: skip
+    everything = json.loads(rostool(["param", "list", "--json"], demo).stdout)
+    assert everything == {"/demo": ["robot_name", "speed", "tags", "use_sim_time", "wheels"]}
+
+
+def test_service_call_and_node_info(demo: dict[str, str]) -> None:
+    argv = [sys.executable, "-c", CALL_ADD]
+    call = subprocess.run(argv, env=demo, capture_output=True, text=True, timeout=60)
+    lines = call.stdout.splitlines()
+    assert lines[0] == "42", call.stderr
+    assert "('/add_two_ints', 'example_interfaces/srv/AddTwoInts', ['/demo'])" in lines[1]
+    info = json.loads(rostool(["node", "info", "/demo", "--json"], demo).stdout)
+    servers = info["service_servers"]
+    assert {"name": "/add_two_ints", "type": "example_interfaces/srv/AddTwoInts"} in servers
+    assert {"name": "/demo/get_parameters", "type": "rcl_interfaces/srv/GetParameters"} in servers
+
+
+def test_param_errors(demo: dict[str, str]) -> None:
+    no_node = rostool(["param", "get", "speed"], demo)
+    assert no_node.returncode == 1
+    assert "ROS 2 parameters belong to a node: rostool param get NODE PARAM" in no_node.stderr
+    absent = rostool(["param", "list", "/ghost"], {**demo})
+    assert absent.returncode == 1 and "unknown node /ghost" in absent.stderr
+    wrong = rostool(["param", "set", "/demo", "tags", "[]"], demo)
+    assert wrong.returncode == 1 and "cannot be a ROS 2 parameter" in wrong.stderr

@@ -1,0 +1,113 @@
+"""ROS 2 wire conventions checked without a network: names, graph messages, discovery configuration."""
+
+from __future__ import annotations
+
+import pytest
+from rosbags.typesys import Stores, get_typestore
+
+from rostool.errors import RostoolError
+from rostool.graph.ros2 import dds, names
+from rostool.graph.ros2.discovery import NodeEntry, decode_entities_info, encode_entities_info
+
+GUID = bytes(range(1, 17))
+READER = bytes(range(16, 32))
+WRITER = bytes(range(32, 48))
+
+
+def test_names_are_mangled_like_rmw() -> None:
+    assert names.topic_to_dds("chatter") == "rt/chatter"
+    assert names.request_topic("/add_two_ints") == "rq/add_two_intsRequest"
+    assert names.reply_topic("/ns/add_two_ints") == "rr/ns/add_two_intsReply"
+    assert names.from_dds_topic("rt/a/b") == ("topic", "/a/b")
+    assert names.from_dds_topic("rq/addRequest") == ("request", "/add")
+    assert names.from_dds_topic("ros_discovery_info") is None
+    assert names.type_to_dds("std_msgs/msg/String") == "std_msgs::msg::dds_::String_"
+    assert names.from_dds_type("example_interfaces::srv::dds_::AddTwoInts_Request_") == (
+        "example_interfaces/srv/AddTwoInts_Request"
+    )
+    assert names.resolve("~/x", "/rostool_1") == "/rostool_1/x"
+
+
+@pytest.mark.parametrize(("distro", "store"), [("jazzy", Stores.ROS2_JAZZY), ("humble", Stores.ROS2_HUMBLE)])
+def test_participant_entities_info_matches_rosbags_cdr(distro: str, store: Stores) -> None:
+    """Our graph message is exactly what rmw_dds_common's type serializes to, for 16- and 24-byte GIDs."""
+    from rostool.graph.ros2.types import gid_size
+
+    size = gid_size(distro)
+    typestore = get_typestore(store)
+    gid = typestore.types["rmw_dds_common/msg/Gid"]
+    node = typestore.types["rmw_dds_common/msg/NodeEntitiesInfo"]
+    info = typestore.types["rmw_dds_common/msg/ParticipantEntitiesInfo"]
+    import numpy as np
+
+    def as_gid(value: bytes) -> object:
+        return gid(data=np.frombuffer(value.ljust(size, b"\0"), dtype=np.uint8))
+
+    message = info(
+        gid=as_gid(GUID),
+        node_entities_info_seq=[
+            node(node_namespace="/", node_name="talker", reader_gid_seq=[as_gid(READER)],
+                 writer_gid_seq=[as_gid(WRITER), as_gid(READER)]),
+            node(node_namespace="/robot", node_name="x", reader_gid_seq=[], writer_gid_seq=[]),
+        ],
+    )  # fmt: skip
+    expected = bytes(typestore.serialize_cdr(message, "rmw_dds_common/msg/ParticipantEntitiesInfo"))
+    nodes = [NodeEntry("/", "talker", [READER], [WRITER, READER]), NodeEntry("/robot", "x")]
+    encoded = encode_entities_info(GUID, nodes, size)
+    assert encoded.rstrip(b"\0") == expected.rstrip(b"\0")
+    participant, decoded = decode_entities_info(expected)
+    assert participant == GUID
+    assert [(n.full_name, n.readers, n.writers) for n in decoded] == [
+        ("/talker", [READER], [WRITER, READER]),
+        ("/robot/x", [], []),
+    ]
+
+
+def test_localhost_config_stays_on_loopback() -> None:
+    config = dds.cyclone_config({})
+    assert '<NetworkInterface address="127.0.0.1"/>' in config
+    assert "<AllowMulticast>false</AllowMulticast>" in config
+    assert '<Peers><Peer address="127.0.0.1"/></Peers>' in config
+    assert "<MaxAutoParticipantIndex>32</MaxAutoParticipantIndex>" in config
+    with_user = dds.cyclone_config({"CYCLONEDDS_URI": "file:///etc/cyclone.xml"})
+    assert with_user.endswith(",file:///etc/cyclone.xml")  # appended, so the user's settings win
+    assert dds.discovery_range({"ROS_LOCALHOST_ONLY": "0"}) == "SUBNET"
+    assert dds.discovery_range({"ROS_LOCALHOST_ONLY": "1", "ROS_AUTOMATIC_DISCOVERY_RANGE": "SUBNET"}) == (
+        "LOCALHOST"
+    )
+    subnet = dds.cyclone_config({"ROS_AUTOMATIC_DISCOVERY_RANGE": "SUBNET"})
+    assert "AllowMulticast" not in subnet and "127.0.0.1" not in subnet
+    assert "<Tag>ros_discovery_off_" in dds.cyclone_config({"ROS_AUTOMATIC_DISCOVERY_RANGE": "OFF"})
+
+
+@pytest.mark.parametrize("value", ["-1", "233", "x"])
+def test_domain_id_out_of_range(value: str) -> None:
+    with pytest.raises(RostoolError, match="ROS_DOMAIN_ID"):
+        dds.domain_id({"ROS_DOMAIN_ID": value})
+
+
+def test_qos_adaptation_follows_ros2cli() -> None:
+    reliable = dds.QosProfile("reliable", "transient_local", 1)
+    best_effort = dds.QosProfile("best_effort", "volatile", 5)
+    assert dds.adapt_to_publishers(dds.QosRequest(), [reliable])[0] == dds.QosProfile(
+        "reliable", "transient_local", 10
+    )
+    mixed, notes = dds.adapt_to_publishers(dds.QosRequest(), [reliable, best_effort])
+    assert mixed == dds.QosProfile("best_effort", "volatile", 10) and len(notes) == 2
+    forced, _ = dds.adapt_to_publishers(dds.QosRequest(reliability="reliable", depth=3), [best_effort])
+    assert forced == dds.QosProfile("reliable", "volatile", 3)
+
+
+def test_our_serialized_messages_equal_real_ros2_bytes() -> None:
+    """What rostool publishes is what a real ROS 2 talker sent (bytes recorded by rosbag2)."""
+    from rostool.bag.reader import BagReader
+    from rostool.graph.ros2.types import TypeSupport
+    from tests.support import TESTDATA
+
+    types = TypeSupport("jazzy")
+    with BagReader([TESTDATA / "ros2" / "talker_mcap"]) as reader:
+        recorded = [bytes(raw) for conn, _t, raw in reader.messages() if conn.topic == "/topic"]
+    assert recorded
+    for index, raw in enumerate(recorded):
+        message = types.store.types["std_msgs/msg/String"](data=f"Hello, world! {index}")
+        assert types.serialize(message, "std_msgs/msg/String") == raw
