@@ -35,7 +35,7 @@ def test_master_unreachable_says_where_and_suggests_core(ros_env: dict[str, str]
         (["param", "get", "/nope"], ["/nope is not set"]),
         (["param", "delete", "/nope"], ["/nope"]),
         (["param", "set", "/x", "{a: [1"], ["invalid YAML"]),
-        (["topic", "pub", "/t", "std_msgs/Strin", "x", "-1"], ["unknown message type 'std_msgs/Strin'"]),
+        (["topic", "pub", "/t", "std_msgs/Strin", "x", "-1"], ["unknown message type std_msgs/Strin"]),
         (["topic", "pub", "/t", "std_msgs/String", "{dta: x}", "-1"], ["no field 'dta'", "data"]),
         (["topic", "pub", "/t", "std_msgs/Int32", "data: hello", "-1"], ["'data' is an int32", "hello"]),
         (["topic", "pub", "/t", "std_msgs/UInt8", "300", "-1"], ["out of range"]),

@@ -207,3 +207,31 @@ def test_unknown_type_is_decoded_from_the_publishers_definition(
         assert len(md5) == 32
     finally:
         stop(pub)
+
+
+def test_pub_custom_type_from_a_source_tree_without_a_build(
+    debian_master: dict[str, str], tmp_path: Path
+) -> None:
+    from tests.support import interface_workspace, with_genpy_classes
+
+    text = "float32 temperature\nstring status\nint16[] history\ngeometry_msgs/Point where\n"
+    src = interface_workspace(tmp_path, {"book_msgs/msg/TemperatureStatus.msg": text})
+    theirs_env = with_genpy_classes(debian_master, src, tmp_path)  # only Debian's rostopic needs a build
+    ours_env = {k: v for k, v in debian_master.items() if k != "ROS_PACKAGE_PATH"}
+    value = "{temperature: 31.5, status: ALERT, history: [29, 30], where: {x: 1.5}}"
+    pub = rostool_popen(
+        ["topic", "pub", "/status", "book_msgs/TemperatureStatus", value, "--interfaces", str(src)], ours_env
+    )
+    try:
+        theirs = debian(["rostopic", "echo", "-n", "1", "/status"], theirs_env, timeout=30)
+        expected = 'temperature: 31.5\nstatus: "ALERT"\nhistory: [29, 30]\n'
+        expected += "where: \n  x: 1.5\n  y: 0.0\n  z: 0.0\n---\n"
+        assert theirs.stdout == expected, theirs.stderr
+    finally:
+        _out, err = stop(pub)
+    assert "Traceback" not in err
+    missing = rostool(
+        ["topic", "pub", "/status", "book_msgs/Nope", "{}", "-1", "--interfaces", str(src)], ours_env
+    )
+    assert missing.returncode != 0 and "unknown message type book_msgs/Nope" in missing.stderr
+    assert str(src) in missing.stderr  # says where it looked

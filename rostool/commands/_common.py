@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import sys
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from typing import TYPE_CHECKING, Any
 
@@ -19,11 +19,11 @@ def ros_version(ctx: click.Context) -> int | None:
 
 
 @contextmanager
-def live_graph(ctx: click.Context) -> Iterator[Graph]:
+def live_graph(ctx: click.Context, interface_paths: Sequence[str] = ()) -> Iterator[Graph]:
     """The selected live graph, always closed (unregistered) on the way out, Ctrl+C included."""
     from rostool.graph import open_graph
 
-    graph = open_graph(ros_version(ctx))
+    graph = open_graph(ros_version(ctx), interface_paths=interface_paths)
     try:
         yield graph
     finally:
@@ -41,3 +41,13 @@ def stdout_is_tty() -> bool:
 
 
 json_option = click.option("--json", "as_json", is_flag=True, help="Print JSON for scripts.")
+
+interfaces_option = click.option(
+    "--interfaces",
+    "interface_paths",
+    multiple=True,
+    type=click.Path(exists=True),
+    envvar="ROSTOOL_INTERFACES",
+    help="Also find .msg/.srv/.action files here: a workspace, a package or one file (repeatable; "
+    "env ROSTOOL_INTERFACES). ROS_PACKAGE_PATH and the workspace around the current folder are searched too.",
+)

@@ -4,17 +4,7 @@ from __future__ import annotations
 
 import click
 
-from rostool.commands._common import json_option, print_json
-
-interfaces_option = click.option(
-    "--interfaces",
-    "interface_paths",
-    multiple=True,
-    type=click.Path(exists=True),
-    envvar="ROSTOOL_INTERFACES",
-    help="Also find .msg/.srv/.action files here: a workspace, a package or one file (repeatable; "
-    "env ROSTOOL_INTERFACES). ROS_PACKAGE_PATH and the workspace around the current folder are searched too.",
-)
+from rostool.commands._common import interfaces_option, json_option, print_json
 
 
 @click.group()

@@ -10,7 +10,7 @@ from typing import Any
 
 import click
 
-from rostool.commands._common import json_option, live_graph, print_json
+from rostool.commands._common import interfaces_option, json_option, live_graph, print_json
 from rostool.errors import RostoolError
 from rostool.graph.ros2.dds import PROFILES, QosRequest
 
@@ -462,6 +462,7 @@ def delay(ctx: click.Context, name: str, window: int | None, duration: float | N
     help="YAML messages separated by ---.",
 )
 @click.option("-q", "--quiet", is_flag=True, help="Print nothing.")
+@interfaces_option
 @click.pass_context
 @qos_options
 def pub(
@@ -475,21 +476,25 @@ def pub(
     count: int | None,
     file: str | None,
     quiet: bool,
+    interface_paths: tuple[str, ...],
     qos: QosRequest,
 ) -> None:
     """Publish a message given as YAML (missing fields get defaults).
 
-    VALUES is one YAML mapping or the field values in order, as rostopic pub takes them.
+    VALUES is one YAML mapping or the field values in order, as rostopic pub takes them. TYPE may be
+    a custom type whose .msg file is in a source tree (--interfaces, ROS_PACKAGE_PATH, the workspace
+    around the current directory): no build needed.
 
     \b
     Examples:
       rostool topic pub /chatter std_msgs/String "data: hi" -1
       rostool topic pub /cmd_vel geometry_msgs/Twist "{linear: {x: 0.5}}" -r 10
       rostool topic pub /point geometry_msgs/Point 1.0 2.0 3.0 -1
+      rostool topic pub /status book_msgs/Status "{level: 2}" --interfaces ~/catkin_ws -1
     """
     from rostool.graph.publishing import publish_loop
 
-    with live_graph(ctx) as graph:
+    with live_graph(ctx, interface_paths) as graph:
         _use_qos(graph, qos)
         publish_loop(
             graph, name, type_name, values, rate=rate, once=once, latch=latch, count=count,

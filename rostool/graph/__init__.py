@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import socket
+from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
@@ -34,7 +35,9 @@ def _port_answers(host: str, port: int, timeout: float = 0.2) -> bool:
         return False
 
 
-def open_graph(explicit_version: int | None, node_name: str = "rostool") -> Graph:
+def open_graph(
+    explicit_version: int | None, node_name: str = "rostool", interface_paths: Sequence[str] = ()
+) -> Graph:
     """Connect to the live graph of the selected ROS version."""
     version = select_ros_version(explicit_version)
     if version == 2:
@@ -43,4 +46,4 @@ def open_graph(explicit_version: int | None, node_name: str = "rostool") -> Grap
         return Ros2Graph(node_name)
     from rostool.graph.ros1.graph import Ros1Graph
 
-    return Ros1Graph(node_name)
+    return Ros1Graph(node_name, interface_paths)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any, Literal
 
 from rostool.errors import RostoolError
@@ -14,7 +14,7 @@ from rostool.graph.ros1.master_client import MasterClient, RemoteError, Unreacha
 from rostool.graph.ros1.names import anonymous, resolve
 from rostool.graph.ros1.node import Node
 from rostool.graph.ros1.topics import InboundLink
-from rostool.interfaces.ros1 import TypeRegistry
+from rostool.interfaces.ros1 import Ros1Type, TypeRegistry
 
 
 class Ros1Graph:
@@ -23,7 +23,8 @@ class Ros1Graph:
     ros_version = 1
     time_style: Literal["ros1", "ros2"] = "ros1"
 
-    def __init__(self, node_name: str = "rostool") -> None:
+    def __init__(self, node_name: str = "rostool", interface_paths: Sequence[str] = ()) -> None:
+        self.interface_paths = tuple(interface_paths)
         self._node_name = node_name
         self._node: Node | None = None
         self.types = TypeRegistry()
@@ -146,7 +147,7 @@ class Ros1Graph:
 
     def publisher(self, topic: str, type_name: str, latch: bool = False) -> Publisher:
         resolved = resolve(topic)
-        msg_type = self.types.builtin(type_name)
+        msg_type = self.wire_type(type_name)
         existing = self.topic_type(resolved)
         if existing and existing not in (msg_type.name, "*"):
             raise RostoolError(
@@ -154,13 +155,19 @@ class Ros1Graph:
             )
         return self.node.advertise(resolved, msg_type, latch)
 
+    def wire_type(self, type_name: str) -> Ros1Type:
+        """A type to publish: from .msg files in the source trees first, then the built-in store."""
+        from rostool.interfaces.sources import interfaces
+
+        return interfaces(self.interface_paths).message(type_name)
+
     def message_class(self, type_name: str) -> type:
-        return self.types.builtin(type_name).message_class()
+        return self.wire_type(type_name).message_class()
 
     def build_message(self, type_name: str, value: Any) -> Any:
         from rostool.interfaces.fill import build_message
 
-        msg_type = self.types.builtin(type_name)
+        msg_type = self.wire_type(type_name)
         return build_message(msg_type.store, msg_type.store_name, value)
 
     # --- parameters ---------------------------------------------------------------------------
