@@ -70,3 +70,11 @@ def rostool_master(ros_env: dict[str, str]) -> Iterator[dict[str, str]]:
     _start_master(proc, ros_env)
     yield ros_env
     stop(proc)
+
+
+@pytest.fixture(params=["debian_roscore", "rostool_master"])
+def book_master(request: pytest.FixtureRequest) -> dict[str, str]:
+    """The book's workflows run on Debian's roscore and on `rostool core` alike."""
+    require_ros1_peers()
+    env: dict[str, str] = request.getfixturevalue(request.param)
+    return env

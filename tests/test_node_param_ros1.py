@@ -112,9 +112,9 @@ def test_param_round_trip_with_their_rosparam(debian_master: dict[str, str], tmp
     assert debian(["rosparam", "get", "/t/yes"], env).returncode != 0
 
 
-def test_book_w2_hello_world(debian_roscore: dict[str, str], tmp_path: Path) -> None:
+def test_book_w2_hello_world(book_master: dict[str, str], tmp_path: Path) -> None:
     """The book's W2: 5 Hz /hello_world publisher and subscriber, inspected with rostool."""
-    env = debian_roscore
+    env = book_master
     pub = start_rospy_script(HELLO_PUBLISHER, env, tmp_path, "publisher_script")
     sub = start_rospy_script(HELLO_SUBSCRIBER, env, tmp_path, "simple_subscriber")
     try:
@@ -135,9 +135,9 @@ def test_book_w2_hello_world(debian_roscore: dict[str, str], tmp_path: Path) -> 
         stop(sub)
 
 
-def test_book_w5_parameters(debian_roscore: dict[str, str], tmp_path: Path) -> None:
+def test_book_w5_parameters(book_master: dict[str, str], tmp_path: Path) -> None:
     """The book's W5: rosdistro, /wheel_radius, dump and load, read back by a rospy node."""
-    env = debian_roscore
+    env = book_master
     listed = rostool(["param", "list"], env).stdout.split()
     assert {"/rosdistro", "/rosversion", "/run_id"} <= set(listed)
     assert (
