@@ -6,11 +6,21 @@ import os
 import socket
 from urllib.parse import urlparse
 
+from rostool.errors import RostoolError
+
 DEFAULT_MASTER_URI = "http://localhost:11311"
 
 
 def master_uri() -> str:
-    return os.environ.get("ROS_MASTER_URI") or DEFAULT_MASTER_URI
+    uri = os.environ.get("ROS_MASTER_URI") or DEFAULT_MASTER_URI
+    try:
+        parsed = urlparse(uri)
+        valid = parsed.scheme in ("http", "https") and bool(parsed.hostname) and parsed.port is not None
+    except ValueError:
+        valid = False
+    if not valid:
+        raise RostoolError(f"ROS_MASTER_URI={uri!r} is not a master URI like http://localhost:11311")
+    return uri
 
 
 def _is_loopback(host: str) -> bool:
