@@ -306,8 +306,8 @@ def test_debian_env_sees_generated_classes(custom_env: dict[str, str]) -> None:
 
 
 def test_service_and_action_verbs_say_ros1_only_on_ros2() -> None:
-    for verb in (["service", "list"], ["action", "list"]):
+    for verb in (["service", "uri", "/x"], ["action", "cancel", "/x"]):
         done = rostool(["--ros2", *verb], {**os.environ})
         assert done.returncode == 1 and done.stdout == ""
-        assert done.stderr.endswith("are supported on ROS 1 graphs only in this rostool version; use --ros1 "
+        assert done.stderr.endswith(": supported on ROS 1 graphs only in this rostool version; use --ros1 "
                                     "(or set ROS_MASTER_URI) with a ROS 1 master\n"), done.stderr  # fmt: skip

@@ -101,7 +101,8 @@ def test_param_list_get_set_describe(demo: dict[str, str]) -> None:
 
     changed = rostool(["param", "set", "/demo", "speed", "2.25"], demo)
     assert changed.stdout == "Set parameter successful\n", changed.stderr
-    assert rostool(["param", "get", "/demo", "speed"], demo).stdout == "Double value is: 2.25\n"
+    changed_back = rostool(["param", "get", "/demo", "speed"], demo)
+    assert changed_back.stdout == "Double value is: 2.25\n", changed_back.stderr
     refused = rostool(["param", "set", "/demo", "wheels", "6"], demo)
     assert refused.returncode == 1
     assert "setting parameter wheels on /demo failed: parameter is read only" in refused.stderr
@@ -137,3 +138,43 @@ def test_param_errors(demo: dict[str, str]) -> None:
     assert absent.returncode == 1 and "unknown node /ghost" in absent.stderr
     wrong = rostool(["param", "set", "/demo", "tags", "[]"], demo)
     assert wrong.returncode == 1 and "cannot be a ROS 2 parameter" in wrong.stderr
+
+
+def test_service_verbs_ros2_forms(demo: dict[str, str]) -> None:
+    """ros2 service list/type/find/call against the demo node, values computed by the server."""
+    listed = rostool(["service", "list"], demo)
+    assert listed.stdout.splitlines() == [
+        "/add_two_ints", "/demo/describe_parameters", "/demo/get_parameters", "/demo/list_parameters",
+        "/demo/set_parameters",
+    ], listed.stderr  # fmt: skip
+    typed = rostool(["service", "list", "-t", "/demo"], demo).stdout.splitlines()
+    assert typed[1] == "/demo/get_parameters [rcl_interfaces/srv/GetParameters]" and len(typed) == 4
+    as_json = json.loads(rostool(["service", "list", "--json"], demo).stdout)
+    add_type = "example_interfaces/srv/AddTwoInts"
+    assert as_json[0] == {"name": "/add_two_ints", "type": add_type, "nodes": ["/demo"]}
+    assert rostool(["service", "type", "add_two_ints"], demo).stdout == "example_interfaces/srv/AddTwoInts\n"
+    assert rostool(["service", "find", "example_interfaces/AddTwoInts"], demo).stdout == "/add_two_ints\n"
+
+    full = ["service", "call", "/add_two_ints", "example_interfaces/srv/AddTwoInts", "{a: 40, b: 2}"]
+    called = rostool(full, demo)
+    assert called.stdout == (
+        "requester: making request: example_interfaces.srv.AddTwoInts_Request(a=40, b=2)\n\n"
+        "response:\nexample_interfaces.srv.AddTwoInts_Response(sum=42)\n\n"
+    ), called.stderr
+    # the type from the graph; pkg/Type; values in field order; --json
+    discovered = rostool(["service", "call", "/add_two_ints", "{a: 7, b: -2}", "--json"], demo)
+    assert json.loads(discovered.stdout) == {"sum": 5}, discovered.stderr
+    in_order = ["service", "call", "add_two_ints", "example_interfaces/AddTwoInts", "-3", "4", "--json"]
+    short = rostool(in_order, demo)
+    assert json.loads(short.stdout) == {"sum": 1}, short.stderr
+    params = ["service", "call", "/demo/get_parameters", "{names: [robot_name]}", "--json"]
+    assert json.loads(rostool(params, demo).stdout)["values"][0]["string_value"] == "r2"
+
+    wrong = rostool(["service", "call", "/add_two_ints", "5"], demo)
+    assert wrong.returncode == 1 and wrong.stdout == ""
+    assert "AddTwoInts takes 2 request value(s) in this order: a b; got 1" in wrong.stderr
+    absent = rostool(["service", "call", "/nope"], demo)
+    assert absent.returncode == 1 and "unknown service /nope: no server announces it" in absent.stderr
+    no_server = rostool(["service", "call", "/nope", "std_srvs/srv/Trigger", "--timeout", "1"], demo)
+    assert no_server.returncode == 1
+    assert "service /nope is not available: no server matched within 1 s" in no_server.stderr

@@ -21,7 +21,7 @@ import sys
 import time
 from collections.abc import Callable, Collection, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any, TextIO
+from typing import Any, Protocol, TextIO
 
 from rosbags.interfaces import Connection, ConnectionExtRosbag1, ConnectionExtRosbag2
 
@@ -62,10 +62,17 @@ class PlayResult:
     skipped: dict[str, str] = field(default_factory=dict)  # topic -> why
 
 
+class RawPublisher(Protocol):
+    """What playing needs of a publisher (a ROS 1 one, or a ROS 2 DDS writer in play_ros2)."""
+
+    def publish_raw(self, payload: bytes) -> None: ...
+    def wait_for_subscribers(self, count: int, timeout: float) -> bool: ...
+
+
 @dataclass
 class _Plan:
     topic: str  # where it is published (after remapping)
-    publisher: Publisher
+    publisher: RawPublisher
     convert: Callable[[Any], Any] | None  # CDR -> ROS 1 bytes for ROS 2 bags
     checked: bool = True  # the first converted message has been decoded with the ROS 1 type
 
@@ -173,7 +180,7 @@ class Player:
         self.clock = PlayClock(options.rate)
         self.result = PlayResult()
         self._plans: dict[int, _Plan] = {}
-        self._publishers: dict[str, tuple[Publisher, str]] = {}  # topic -> (publisher, md5)
+        self._publishers: dict[str, tuple[RawPublisher, str]] = {}  # topic -> (publisher, md5 or type)
         self._clock_pub: Publisher | None = None
         self._next_tick = 0.0
         self._next_ui = 0.0

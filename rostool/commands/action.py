@@ -1,4 +1,5 @@
-"""`rostool action`: list, info, show, send-goal, cancel (actionlib over topics, ROS 1)."""
+"""`rostool action`: list, info, show, send-goal, cancel (actionlib over topics, ROS 1); on ROS 2 list, info
+and send-goal in ros2 action's forms and output."""
 
 from __future__ import annotations
 
@@ -9,19 +10,20 @@ from typing import TYPE_CHECKING, Any
 import click
 
 from rostool.commands._common import json_option, print_json
-from rostool.commands.service import ros1_graph
+from rostool.commands.service import is_ros2, ros1_graph, ros2_graph
 from rostool.commands.srv import interfaces_option
 from rostool.errors import RostoolError
 
 if TYPE_CHECKING:
     from rostool.graph.ros1.actions import GoalEvent
+    from rostool.graph.ros2.actions import GoalEvent as Ros2GoalEvent
 
 _TYPE_NAME = re.compile(r"[A-Za-z][\w]*/(action/)?[A-Za-z]\w*\Z")
 
 
 @click.group()
 def action() -> None:
-    """Use actionlib actions (ROS 1): list servers, send goals and follow them, cancel.
+    """Use actionlib actions (ROS 1) and ROS 2 actions: list servers, send goals and follow them, cancel.
 
     Goal, result and feedback types come from .action files in source trees (--interfaces,
     ROS_PACKAGE_PATH, the current workspace) or the built-in types: no catkin build needed.
@@ -32,21 +34,37 @@ def action() -> None:
       rostool action info /navigate_2d_action
       rostool action send-goal /navigate_2d_action "{point: {x: 1.0, y: 2.0}}" --feedback
       rostool action cancel /navigate_2d_action
+      rostool --ros2 action send-goal /fibonacci example_interfaces/action/Fibonacci "{order: 5}" --feedback
     """
 
 
 @action.command("list")
+@click.option("-t", "--show-types", is_flag=True, help="ROS 2: also print each action's type.")
 @json_option
 @click.pass_context
-def list_actions(ctx: click.Context, as_json: bool) -> None:
-    """List the actions of the live graph (namespaces with goal, cancel, status, feedback, result).
+def list_actions(ctx: click.Context, show_types: bool, as_json: bool) -> None:
+    """List the actions of the live graph (namespaces with goal, cancel, status, feedback, result; on ROS 2
+    actions with a server).
 
     \b
-    Example:
+    Examples:
       rostool action list
+      rostool --ros2 action list -t          # /fibonacci [example_interfaces/action/Fibonacci]
     """
     from rostool.graph.ros1.actions import list_actions as find_actions
 
+    if is_ros2(ctx):
+        from rostool.graph.ros2.actions import list_actions as find_ros2_actions
+
+        with ros2_graph(ctx) as graph2:
+            found2 = find_ros2_actions(graph2)
+        if as_json:
+            print_json([vars(a) for a in found2])
+        for summary2 in [] if as_json else found2:
+            click.echo(f"{summary2.name} [{summary2.type}]" if show_types else summary2.name)
+        return
+    if show_types:
+        raise RostoolError("action list -t applies to ROS 2 graphs only (ROS 1: `rostool action info`)")
     with ros1_graph(ctx, "actions") as graph:
         found = find_actions(graph)
     if as_json:
@@ -71,6 +89,9 @@ def info(ctx: click.Context, name: str, wait: float, as_json: bool) -> None:
     """
     from rostool.graph.ros1.actions import action_summary, goal_states
 
+    if is_ros2(ctx):
+        _info_ros2(ctx, name, as_json)
+        return
     with ros1_graph(ctx, "actions") as graph:
         summary = action_summary(graph, name)
         goals = goal_states(graph, summary.name, wait)
@@ -89,6 +110,25 @@ def info(ctx: click.Context, name: str, wait: float, as_json: bool) -> None:
     click.echo(f"Goals: {'None' if not goals else ''}")
     for goal in goals:
         click.echo(f" * {goal.id}: {goal.status_name}" + (f" ({goal.text})" if goal.text else ""))
+
+
+def _info_ros2(ctx: click.Context, name: str, as_json: bool) -> None:
+    """ros2 action info: the clients and servers of an action."""
+    from rostool.graph.ros2.actions import list_actions as find_actions
+
+    with ros2_graph(ctx) as graph:
+        action_name = graph.resolve(name)
+        found = next((a for a in find_actions(graph) if a.name == action_name), None)
+    if found is None:
+        raise RostoolError(f"unknown action {action_name}: no server announces it (`rostool action list`)")
+    if as_json:
+        print_json(vars(found))
+        return
+    click.echo(f"Action: {found.name}\nType: {found.type}")
+    for title, nodes in (("Action clients", found.clients), ("Action servers", found.servers)):
+        click.echo(f"{title}: {len(nodes)}")
+        for node in nodes:
+            click.echo(f"    {node}")
 
 
 @action.command("show")
@@ -165,6 +205,18 @@ def send_goal(
 
     type_name, goal_values = _split_goal_args(values)
     goal = message_args(goal_values)
+    if is_ros2(ctx):
+        from rostool.graph.ros2.actions import send_goal as run_ros2_goal
+
+        render2 = _Ros2Renderer(as_json, show_feedback)
+        with ros2_graph(ctx) as graph2:
+            outcome2 = run_ros2_goal(
+                graph2, name, type_name, goal, timeout, on_event=render2.event, on_sent=render2.sent,
+                on_waiting=lambda text: click.echo(text, err=True), on_cancel=render2.canceling,
+            )  # fmt: skip
+        if not outcome2.succeeded:
+            ctx.exit(1)
+        return
     render = _Renderer(as_json, show_feedback)
     with ros1_graph(ctx, "actions") as graph:
         outcome = run_goal(
@@ -211,6 +263,52 @@ class _Renderer:
         sys.stdout.flush()
 
 
+class _Ros2Renderer:
+    """ros2 action send_goal's text, or one JSON object per event."""
+
+    def __init__(self, as_json: bool, show_feedback: bool) -> None:
+        self.as_json = as_json
+        self.show_feedback = show_feedback
+
+    def sent(self, goal_id: str, goal: Any, accepted: bool) -> None:
+        from rostool.output.plain import to_plain
+        from rostool.output.yaml_text import to_yaml
+
+        if self.as_json:
+            goal_plain = to_plain(goal, "ros2")
+            print_json({"event": "sent", "goal_id": goal_id, "accepted": accepted, "goal": goal_plain})
+        else:
+            answer = f"Goal accepted with ID: {goal_id}\n" if accepted else "Goal was rejected."
+            click.echo(f"Sending goal:\n     {to_yaml(goal, 'ros2')}\n\n{answer}")
+        sys.stdout.flush()
+
+    def canceling(self, goal_id: str) -> None:
+        if self.as_json:
+            print_json({"event": "canceling", "goal_id": goal_id})
+        else:
+            click.echo("Canceling goal...")
+        sys.stdout.flush()
+
+    def event(self, event: Ros2GoalEvent) -> None:
+        from rostool.output.plain import to_plain
+        from rostool.output.yaml_text import to_yaml
+
+        if event.kind == "feedback" and not self.show_feedback:
+            return
+        if self.as_json:
+            body: dict[str, Any] = {"event": event.kind}
+            if event.kind == "result":
+                body["status"] = event.status_name
+            body[event.kind] = to_plain(event.message, "ros2")
+            print_json(body)
+        elif event.kind == "feedback":
+            click.echo(f"Feedback:\n    {to_yaml(event.message, 'ros2')}\n")
+        else:
+            click.echo(f"Result:\n    {to_yaml(event.message, 'ros2')}\n")
+            click.echo(f"Goal finished with status: {event.status_name}")
+        sys.stdout.flush()
+
+
 def _indented(message: Any) -> str:
     from rostool.output.yaml_text import to_yaml
 
@@ -235,6 +333,6 @@ def cancel(ctx: click.Context, name: str, goal_id: str | None, cancel_all: bool)
 
     if cancel_all and goal_id is not None:
         raise RostoolError("give a GOAL_ID or --all, not both (`rostool action info ACTION` lists goal ids)")
-    with ros1_graph(ctx, "actions") as graph:
+    with ros1_graph(ctx, "action cancel (on ROS 2: Ctrl+C on send-goal)") as graph:
         cancel_goals(graph, name, goal_id or "")
     click.echo(f"canceled {goal_id or 'every goal'} of {name}")

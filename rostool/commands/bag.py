@@ -17,6 +17,7 @@ from rostool.errors import RostoolError
 
 if TYPE_CHECKING:
     from rostool.graph.ros1.graph import Ros1Graph
+    from rostool.graph.ros2.graph import Ros2Graph
 
 CONTEXT = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
 TIME_HELP = "seconds since the epoch, or +S for S seconds after the bag's first message"
@@ -342,13 +343,15 @@ def play(
     quiet: bool,
     distro: str,
 ) -> None:
-    """Publish the messages of bags into the live ROS 1 graph, on their recorded schedule.
+    """Publish the messages of bags into the live graph, on their recorded schedule.
 
     ROS 1 bags are published byte for byte with their stored types (latched where recorded so). ROS 2
     bags (.mcap, .db3, rosbag2 directories) are converted to ROS 1 (`pkg/msg/T` -> `pkg/T`); topics whose
-    type has no ROS 1 equivalent are skipped with a warning. On a terminal, a status line shows the bag
-    time and space pauses/resumes ('s' steps while paused). Remappings may also be given as arguments
-    (`/chatter:=/talk`), and with --topics, further topic names after the bags.
+    type has no ROS 1 equivalent are skipped with a warning. Into a ROS 2 graph (--ros2), ROS 2 bags'
+    CDR bytes are published unchanged with the bag's type names (transient_local where recorded so).
+    On a terminal, a status line shows the bag time and space pauses/resumes ('s' steps while paused).
+    Remappings may also be given as arguments (`/chatter:=/talk`), and with --topics, further topic
+    names after the bags.
 
     \b
     Examples:
@@ -356,13 +359,14 @@ def play(
       rostool bag play -r 2 -s 10 -u 5 run.bag --topics /odom,/tf
       rostool bag play -l --clock run.bag /scan:=/scan_raw
       rostool bag play talker.mcap
+      rostool --ros2 bag play talker.mcap
     """
     from rostool.bag.play import Console, Player, PlayOptions, parse_remaps
     from rostool.bag.reader import BagReader
     from rostool.commands._common import live_graph
 
     paths, remap_args, extra_topics = _play_arguments(args, bool(topics))
-    _require_ros1(ctx)
+    ros2 = _selected_version(ctx) == 2
     options = PlayOptions(
         rate=rate,
         start=start,
@@ -383,7 +387,12 @@ def play(
         console = Console.detect(quiet)
         if pause and not console.keyboard:
             raise RostoolError("--pause needs a terminal on stdin to resume with space")
-        player = Player(reader, _ros1(graph), options, console, warn)
+        if ros2:
+            from rostool.bag.play_ros2 import Ros2Player
+
+            player: Player = Ros2Player(reader, _ros2(graph), options, console, warn)
+        else:
+            player = Player(reader, _ros1(graph), options, console, warn)
         with console:
             player.advertise()
             result = player.run()
@@ -410,18 +419,30 @@ def _play_arguments(args: Sequence[str], with_topics: bool) -> tuple[list[str], 
 
 
 _NEEDS_ROS1 = (
-    "bag play and bag record work with a ROS 1 graph only for now: point ROS_MASTER_URI at a ROS 1 "
+    "bag record works with a ROS 1 graph only for now: point ROS_MASTER_URI at a ROS 1 "
     "master (or pass --ros1)"
 )
 
 
-def _require_ros1(ctx: click.Context) -> None:
-    """Before opening anything: a ROS 2 graph (chosen or detected) is not what play/record talk to."""
+def _selected_version(ctx: click.Context) -> int:
     from rostool.commands._common import ros_version
     from rostool.graph import select_ros_version
 
-    if select_ros_version(ros_version(ctx)) != 1:
+    return select_ros_version(ros_version(ctx))
+
+
+def _require_ros1(ctx: click.Context) -> None:
+    """Before opening anything: a ROS 2 graph (chosen or detected) is not what record talks to."""
+    if _selected_version(ctx) != 1:
         raise RostoolError(_NEEDS_ROS1)
+
+
+def _ros2(graph: object) -> Ros2Graph:
+    from rostool.graph.ros2.graph import Ros2Graph
+
+    if not isinstance(graph, Ros2Graph):
+        raise RostoolError("bag play into ROS 2 needs a ROS 2 graph (--ros2 or ROS_VERSION=2)")
+    return graph
 
 
 def _ros1(graph: object) -> Ros1Graph:

@@ -1,10 +1,13 @@
-"""`rostool service`: list, type, info, uri, node, args, find, call (rosservice's forms and output)."""
+"""`rostool service`: list, type, info, uri, node, args, find, call (rosservice's forms and output; on ROS 2
+list, type, find and call in ros2 service's forms and output)."""
 
 from __future__ import annotations
 
+import math
+import re
 from collections.abc import Iterator
 from contextlib import contextmanager
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import click
 
@@ -14,6 +17,10 @@ from rostool.errors import RostoolError
 
 if TYPE_CHECKING:
     from rostool.graph.ros1.graph import Ros1Graph
+    from rostool.graph.ros2.graph import Ros2Graph
+
+_SRV_TYPE = re.compile(r"[A-Za-z]\w*/(srv/)?[A-Za-z]\w*\Z")
+ROS2_WAIT_SECONDS = 5.0  # how long `call` gives a seen (or given) service's server to match without --wait
 
 
 @click.group()
@@ -27,7 +34,36 @@ def service() -> None:
       rostool service type /sum_two_ints
       rostool service call /sum_two_ints 7 8
       rostool service call /sum_two_ints "{a: 7, b: 8}" --json
+      rostool --ros2 service call /add_two_ints example_interfaces/srv/AddTwoInts "{a: 1, b: 2}"
     """
+
+
+def is_ros2(ctx: click.Context) -> bool:
+    """Whether ROS 2 is selected (decided before any graph starts)."""
+    from rostool.graph import select_ros_version
+
+    return select_ros_version(ros_version(ctx)) == 2
+
+
+@contextmanager
+def ros2_graph(ctx: click.Context) -> Iterator[Ros2Graph]:
+    from rostool.graph.ros2.graph import Ros2Graph
+
+    with live_graph(ctx) as graph:
+        if not isinstance(graph, Ros2Graph):
+            raise RostoolError("this form needs a ROS 2 graph (--ros2 or ROS_VERSION=2)")
+        yield graph
+
+
+def _hidden(name: str) -> bool:
+    """ros2cli hides names with a token starting with `_` (e.g. actions' `/x/_action/send_goal`)."""
+    return any(token.startswith("_") for token in name.split("/"))
+
+
+def srv_store_name(type_name: str) -> str:
+    """`pkg/Name` or `pkg/srv/Name` -> `pkg/srv/Name`."""
+    pkg, _, name = type_name.strip().strip("/").rpartition("/")
+    return f"{pkg.removesuffix('/srv')}/srv/{name}"
 
 
 @contextmanager
@@ -38,31 +74,43 @@ def ros1_graph(ctx: click.Context, what: str = "services") -> Iterator[Ros1Graph
 
     if select_ros_version(ros_version(ctx)) != 1:
         raise RostoolError(
-            f"{what} are supported on ROS 1 graphs only in this rostool version; "
+            f"{what}: supported on ROS 1 graphs only in this rostool version; "
             "use --ros1 (or set ROS_MASTER_URI) with a ROS 1 master"
         )
     with live_graph(ctx) as graph:
         if not isinstance(graph, Ros1Graph):
-            raise RostoolError(f"{what} are supported on ROS 1 graphs only in this rostool version")
+            raise RostoolError(f"{what}: supported on ROS 1 graphs only in this rostool version")
         yield graph
 
 
 @service.command("list")
 @click.argument("namespace", required=False)
 @click.option("-n", "--nodes", "with_nodes", is_flag=True, help="Also print the node providing each service.")
+@click.option("-t", "--show-types", is_flag=True, help="ROS 2: also print each service's type.")
+@click.option(
+    "-a", "--include-hidden-services", "hidden", is_flag=True, help="ROS 2: also list hidden services."
+)
 @json_option
 @click.pass_context
-def list_services(ctx: click.Context, namespace: str | None, with_nodes: bool, as_json: bool) -> None:
+def list_services(
+    ctx: click.Context, namespace: str | None, with_nodes: bool, show_types: bool, hidden: bool, as_json: bool
+) -> None:
     """List the services of the live graph (optionally only those under NAMESPACE).
 
     \b
     Examples:
       rostool service list
       rostool service list -n /sum_server
+      rostool --ros2 service list -t          # /add_two_ints [example_interfaces/srv/AddTwoInts]
     """
     from rostool.graph.ros1.names import resolve
     from rostool.graph.ros1.services import services
 
+    if is_ros2(ctx):
+        _list_ros2(ctx, namespace, with_nodes, show_types, hidden, as_json)
+        return
+    if show_types or hidden:
+        raise RostoolError("service list -t / -a apply to ROS 2 graphs only (ROS 1: `rostool service type`)")
     with ros1_graph(ctx) as graph:
         found = services(graph.master)
     if namespace:
@@ -78,6 +126,22 @@ def list_services(ctx: click.Context, namespace: str | None, with_nodes: bool, a
             click.echo(name)
 
 
+def _list_ros2(
+    ctx: click.Context, namespace: str | None, with_nodes: bool, show_types: bool, hidden: bool, as_json: bool
+) -> None:
+    with ros2_graph(ctx) as graph:
+        found = [s for s in graph.services() if hidden or not _hidden(s[0])]
+        if namespace:
+            prefix = graph.resolve(namespace).rstrip("/") + "/"
+            found = [s for s in found if s[0] == prefix[:-1] or s[0].startswith(prefix)]
+    if as_json:
+        print_json([{"name": name, "type": type_, "nodes": nodes} for name, type_, nodes in found])
+        return
+    for name, type_, nodes in found:
+        line = f"{name} [{type_}]" if show_types else name
+        click.echo(f"{line} {','.join(nodes)}" if with_nodes else line)
+
+
 @service.command("type")
 @click.argument("name", metavar="SERVICE")
 @click.pass_context
@@ -90,6 +154,13 @@ def type_(ctx: click.Context, name: str) -> None:
     """
     from rostool.graph.ros1.services import service_info
 
+    if is_ros2(ctx):
+        with ros2_graph(ctx) as graph2:
+            found = graph2.find_service_type(name)
+            if found is None:
+                raise RostoolError(f"unknown service {graph2.resolve(name)}: no server announces it")
+        click.echo(found)
+        return
     with ros1_graph(ctx) as graph:
         click.echo(service_info(graph.master, name).type)
 
@@ -106,7 +177,7 @@ def uri(ctx: click.Context, name: str) -> None:
     """
     from rostool.graph.ros1.services import lookup
 
-    with ros1_graph(ctx) as graph:
+    with ros1_graph(ctx, "service uri") as graph:
         click.echo(lookup(graph.master, name))
 
 
@@ -124,7 +195,7 @@ def node(ctx: click.Context, name: str) -> None:
     from rostool.graph.ros1.services import services
 
     resolved = resolve(name)
-    with ros1_graph(ctx) as graph:
+    with ros1_graph(ctx, "service node (on ROS 2: service list -n)") as graph:
         nodes = next((n for s, n in services(graph.master) if s == resolved), None)
     if not nodes:
         raise RostoolError(f"unknown service {resolved}: no node provides it (see `rostool service list`)")
@@ -145,7 +216,7 @@ def args(ctx: click.Context, name: str, interface_paths: tuple[str, ...]) -> Non
     from rostool.graph.ros1.services import lookup, service_type
     from rostool.interfaces.sources import interfaces
 
-    with ros1_graph(ctx) as graph:
+    with ros1_graph(ctx, "service args") as graph:
         master = graph.master
         found = service_type(master, interfaces(interface_paths), name, lookup(master, name))
     click.echo(found.request_args())
@@ -167,7 +238,7 @@ def info(ctx: click.Context, name: str, interface_paths: tuple[str, ...], as_jso
     from rostool.interfaces.sources import InterfaceError, interfaces
     from rostool.interfaces.srv import load_service
 
-    with ros1_graph(ctx) as graph:
+    with ros1_graph(ctx, "service info (on ROS 2: service list -t -n)") as graph:
         found = service_info(graph.master, name)
     try:
         request_args: str | None = load_service(interfaces(interface_paths), found.type).request_args()
@@ -197,6 +268,13 @@ def find(ctx: click.Context, type_name: str) -> None:
     """
     from rostool.graph.ros1.services import lookup, probe, services
 
+    if is_ros2(ctx):
+        wanted = srv_store_name(type_name)
+        with ros2_graph(ctx) as graph2:
+            for name, type_, _nodes in graph2.services():
+                if type_ == wanted and not _hidden(name):
+                    click.echo(name)
+        return
     with ros1_graph(ctx) as graph:
         master = graph.master
         for name, _nodes in services(master):
@@ -232,7 +310,8 @@ def call(
     """Call a service and print its response (YAML like rosservice, or --json).
 
     VALUES are the request fields in order, or one YAML mapping. The type is asked from the service
-    and its .srv found in the sources (see --interfaces).
+    and its .srv found in the sources (see --interfaces). On ROS 2, ros2 service call's form: an optional
+    TYPE (pkg/srv/Name or pkg/Name; default: the type the server announces) before the values.
 
     \b
     Examples:
@@ -240,12 +319,23 @@ def call(
       rostool service call /sum_two_ints "{a: 7, b: 8}"
       rostool service call /set_enabled true --wait --timeout 5
       rostool service call /reset
+      rostool --ros2 service call /add_two_ints example_interfaces/srv/AddTwoInts "{a: 1, b: 2}"
+      rostool --ros2 service call /add_two_ints "{a: 1, b: 2}" --json
     """
     from rostool.graph.ros1 import services
     from rostool.interfaces.sources import interfaces
     from rostool.output.plain import to_plain
     from rostool.output.yaml_text import to_yaml
 
+    if is_ros2(ctx):
+        with ros2_graph(ctx) as graph2:
+            request, response = _call_ros2(graph2, name, values, wait, timeout)
+            if as_json:
+                print_json(to_plain(response, "ros2"))
+            else:
+                click.echo(f"requester: making request: {message_repr(request)}\n")
+                click.echo(f"response:\n{message_repr(response)}\n")
+        return
     with ros1_graph(ctx) as graph:
         _srv, response = services.call(
             graph.master, interfaces(interface_paths), name, values, wait=wait, timeout=timeout
@@ -254,3 +344,67 @@ def call(
         print_json(to_plain(response))
     else:
         click.echo(to_yaml(response))
+
+
+def _call_ros2(
+    graph: Ros2Graph, name: str, values: tuple[str, ...], wait: bool, timeout: float | None
+) -> tuple[Any, Any]:
+    """Find the type (given or announced), build the request, wait for the server, call."""
+    import time
+
+    resolved = graph.resolve(name)
+    srv_type = values[0] if values and _SRV_TYPE.match(values[0]) else None
+    if srv_type is not None:
+        values = values[1:]
+    limit = timeout if timeout is not None else (math.inf if wait else ROS2_WAIT_SECONDS)
+    deadline = time.monotonic() + limit
+    while srv_type is None:
+        srv_type = graph.find_service_type(resolved)
+        if srv_type is None and (not wait or time.monotonic() >= deadline):
+            raise RostoolError(
+                f"unknown service {resolved}: no server announces it (see `rostool service list`); "
+                "give its TYPE after the name to wait for it with --wait"
+            )
+        if srv_type is None:
+            time.sleep(0.1)
+    client = graph.service_client(resolved, srv_type)
+    request = graph.build_message(client.request_type, _request_value(graph, client.request_type, values))
+    remaining = max(deadline - time.monotonic(), 0.001)
+    if not client.wait_for_server(remaining):
+        hint = "" if wait else " (--wait waits for it)"
+        raise RostoolError(f"service {resolved} is not available: no server matched within {limit:g} s{hint}")
+    return request, client.call(request, timeout if timeout is not None else math.inf)
+
+
+def _request_value(graph: Ros2Graph, request_type: str, values: tuple[str, ...]) -> Any:
+    """One YAML mapping, or the request fields in order (as `rosservice call` takes them)."""
+    from rostool.graph.ros1.services import parse_args
+    from rostool.output.plain import field_names
+
+    parsed = parse_args(values)
+    if not parsed:
+        return {}
+    if len(parsed) == 1 and isinstance(parsed[0], dict):
+        return parsed[0]
+    fields = field_names(graph.message_class(request_type))
+    if len(parsed) != len(fields):
+        srv = request_type.removesuffix("_Request")
+        raise RostoolError(
+            f"{srv} takes {len(fields)} request value(s) in this order: {' '.join(fields) or '(none)'}; "
+            f"got {len(parsed)}. Give them in order or as one YAML mapping"
+        )
+    return dict(zip(fields, parsed, strict=True))
+
+
+def message_repr(value: Any) -> str:
+    """A message as rclpy's repr shows it: `pkg.srv.Name_Request(a=1, b=2)`."""
+    from rostool.output.plain import is_message, message_fields
+
+    if is_message(value):
+        fields = ", ".join(f"{k}={message_repr(v)}" for k, v in message_fields(value))
+        return f"{getattr(value, '__msgtype__', type(value).__name__).replace('/', '.')}({fields})"
+    if hasattr(value, "tolist"):
+        value = value.tolist()
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(message_repr(v) for v in value) + "]"
+    return repr(value)

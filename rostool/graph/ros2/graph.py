@@ -14,10 +14,10 @@ import threading
 import time
 from collections.abc import Callable
 from dataclasses import replace
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 from rostool.errors import RostoolError
-from rostool.graph.base import NodeInfo, Publisher, Received, Subscription, TopicInfo
+from rostool.graph.base import NodeInfo, Received, Subscription, TopicInfo
 from rostool.graph.ros2 import dds
 from rostool.graph.ros2.discovery import (
     DISCOVERY_TOPIC,
@@ -30,6 +30,9 @@ from rostool.graph.ros2.discovery import (
 )
 from rostool.graph.ros2.names import resolve, service_type, topic_to_dds, type_to_dds
 from rostool.graph.ros2.types import TypeSupport, distro_from_env, gid_size
+
+if TYPE_CHECKING:
+    from rostool.graph.ros2.services import ServiceClient
 
 SETTLE_MAX_SECONDS = 3.0  # listing verbs: how long an empty graph is given before "no participants"
 TOPIC_WAIT_SECONDS = 1.5
@@ -281,7 +284,7 @@ class Ros2Graph:
         self._subscriptions.append(sub)
         return sub
 
-    def publisher(self, topic: str, type_name: str, latch: bool = False) -> Publisher:
+    def publisher(self, topic: str, type_name: str, latch: bool = False) -> _Publisher:
         resolved = resolve(topic)
         store_name = self.types.store_name(type_name)
         existing = self.topic_type(resolved)
@@ -311,11 +314,40 @@ class Ros2Graph:
             entry[1].append(owners.get(endpoint.guid, UNKNOWN_NODE))
         return [(name, found[name][0], sorted(found[name][1])) for name in sorted(found)]
 
-    def call_service(self, service: str, srv_type: str, request: Any, timeout: float = 5.0) -> Any:
-        """Call a service (rmw_cyclonedds_cpp's request/reply convention) with a request mapping."""
+    def service_endpoints(self) -> list[tuple[str, str, list[str], list[str]]]:
+        """(name, type, server nodes, client nodes) of every service that has a server."""
+        cache = self._settled(require_peers=True)
+        owners = self._owners(cache)
+        found: dict[str, tuple[str, set[str], set[str]]] = {}
+        for endpoint in cache.remote_endpoints():
+            ros = endpoint.ros
+            if ros is None or ros[0] != "request":
+                continue
+            entry = found.setdefault(ros[1], ("", set(), set()))
+            node = owners.get(endpoint.guid, UNKNOWN_NODE)
+            if endpoint.is_writer:
+                entry[2].add(node)
+            else:
+                found[ros[1]] = (service_type(endpoint.type_name), entry[1] | {node}, entry[2])
+        return [
+            (name, type_, sorted(servers), sorted(clients))
+            for name, (type_, servers, clients) in sorted(found.items())
+            if servers
+        ]
+
+    def find_service_type(self, service: str) -> str | None:
+        """The type a server of `service` announces (`pkg/srv/Name`), None when no server is seen."""
+        resolved = resolve(service)
+        return next((type_ for name, type_, _nodes in self.services() if name == resolved), None)
+
+    def service_client(self, service: str, srv_type: str) -> ServiceClient:
         from rostool.graph.ros2.services import ServiceClient
 
-        client = ServiceClient(self.session, resolve(service), srv_type)
+        return ServiceClient(self.session, resolve(service), srv_type)
+
+    def call_service(self, service: str, srv_type: str, request: Any, timeout: float = 5.0) -> Any:
+        """Call a service (rmw_cyclonedds_cpp's request/reply convention) with a request mapping."""
+        client = self.service_client(service, srv_type)
         message = self.build_message(client.request_type, request)
         return client.call(message, timeout)
 

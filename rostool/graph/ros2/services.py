@@ -31,6 +31,7 @@ from rostool.graph.ros2.names import reply_topic, request_topic
 from rostool.graph.ros2.types import TypeSupport
 
 SERVICE_QOS = dds.PROFILES["services_default"]
+REPLY_MATCH_WAIT = 2.0  # how long a server waits for its reply writer to match a new client's reader
 _ANY_SAMPLE = 0x7F
 
 SRV_DEFINITIONS: dict[str, str] = {
@@ -40,7 +41,15 @@ SRV_DEFINITIONS: dict[str, str] = {
     "rcl_interfaces/srv/SetParameters": "Parameter[] parameters\n---\nSetParametersResult[] results\n",
     "rcl_interfaces/srv/DescribeParameters": "string[] names\n---\nParameterDescriptor[] descriptors\n",
     "rcl_interfaces/srv/GetParameterTypes": "string[] names\n---\nuint8[] types\n",
+    "action_msgs/srv/CancelGoal": "GoalInfo goal_info\n---\nint8 ERROR_NONE=0\nint8 ERROR_REJECTED=1\n"
+    "int8 ERROR_UNKNOWN_GOAL_ID=2\nint8 ERROR_GOAL_TERMINATED=3\n"
+    "int8 return_code\nGoalInfo[] goals_canceling\n",
     "example_interfaces/srv/AddTwoInts": "int64 a\nint64 b\n---\nint64 sum\n",
+    "example_interfaces/srv/SetBool": "bool data\n---\nbool success\nstring message\n",
+    "example_interfaces/srv/Trigger": "---\nbool success\nstring message\n",
+    "std_srvs/srv/Empty": "---\n",
+    "std_srvs/srv/SetBool": "bool data\n---\nbool success\nstring message\n",
+    "std_srvs/srv/Trigger": "---\nbool success\nstring message\n",
 }
 
 
@@ -49,11 +58,12 @@ def register_service(types: TypeSupport, srv_type: str, text: str | None = None)
     parts = srv_type.strip().strip("/").split("/")
     if len(parts) == 2:
         pkg, name = parts
-    elif len(parts) == 3 and parts[1] == "srv":
-        pkg, _srv, name = parts
+        kind = "srv"
+    elif len(parts) == 3 and parts[1] in ("srv", "action"):  # actions' services are `pkg/action/X_SendGoal`
+        pkg, kind, name = parts
     else:
         raise RostoolError(f"bad service type {srv_type!r}: use pkg/srv/Name (or pkg/Name)")
-    full = f"{pkg}/srv/{name}"
+    full = f"{pkg}/{kind}/{name}"
     request, response = f"{full}_Request", f"{full}_Response"
     if types.knows(request) and types.knows(response):
         return request, response
@@ -62,7 +72,7 @@ def register_service(types: TypeSupport, srv_type: str, text: str | None = None)
         raise RostoolError(
             f"unknown service type {srv_type!r}: rostool knows {', '.join(sorted(SRV_DEFINITIONS))}"
         )
-    request_text, _, response_text = text.partition("\n---\n")
+    request_text, _, response_text = ("\n" + text).partition("\n---\n")
     typs: dict[str, Any] = {}
     for part, body in (("Request", request_text), ("Response", response_text)):
         # rosbags' .msg parser names types `pkg/msg/...`; parse there, then file under `pkg/srv/`
@@ -168,7 +178,20 @@ class ServiceServer:
                 guid, seq, cdr = _split(data)
                 response = self._handler(self._types.deserialize(cdr, self.request_type))
                 reply = _join(guid, seq, self._types.serialize(response, self.response_type))
+                self._wait_for_reply_readers()
                 ddspy_write(self._writer._ref, reply)
+
+    def _wait_for_reply_readers(self, timeout: float = REPLY_MATCH_WAIT) -> None:
+        """Discovery matches each direction on its own: a client may see us (and send a request) before our
+        reply writer has matched its reply reader, and a volatile reply written then is lost. Every client
+        has one request writer and one reply reader, so wait until we match as many readers as writers."""
+        deadline = time.monotonic() + timeout
+        while (
+            self._writer.get_publication_matched_status().current_count
+            < self._reader.get_subscription_matched_status().current_count
+            and time.monotonic() < deadline
+        ):
+            time.sleep(0.005)
 
     def close(self) -> None:
         self._closed.set()

@@ -1,0 +1,337 @@
+"""ROS 2 actions over DDS, as rcl_action lays them out (rcl_action/names.c, default_qos.h).
+
+An action `/fibonacci` of type `pkg/action/Fibonacci` is three services and two topics:
+
+- `/fibonacci/_action/send_goal` (`pkg/action/Fibonacci_SendGoal`: request `goal_id` + `goal`, response
+  `accepted` + `stamp`), `/fibonacci/_action/get_result` (`Fibonacci_GetResult`: request `goal_id`, response
+  `status` + `result`; the server answers when the goal is done) and `/fibonacci/_action/cancel_goal`
+  (`action_msgs/srv/CancelGoal`);
+- `/fibonacci/_action/feedback` (`Fibonacci_FeedbackMessage`: `goal_id` + `feedback`, default QoS) and
+  `/fibonacci/_action/status` (`action_msgs/msg/GoalStatusArray`; reliable, transient_local, depth 1).
+
+`goal_id` is a unique_identifier_msgs/UUID (16 random bytes the client picks). The derived types are built
+here the way rosidl_parser's `Action` derives them; rosbags' stores hold action_msgs and
+unique_identifier_msgs but no action types, so the goal, result and feedback come from .action text.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+import uuid
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+from rosbags.interfaces import Nodetype
+from rosbags.typesys import get_types_from_msg
+
+from rostool.errors import RostoolError
+from rostool.graph.ros2 import dds
+from rostool.graph.ros2.names import resolve, topic_to_dds
+from rostool.graph.ros2.services import ServiceClient
+
+if TYPE_CHECKING:
+    from rostool.graph.ros2.graph import Ros2Graph, Session
+    from rostool.graph.ros2.types import TypeSupport
+
+ACTION_INFIX = "/_action/"
+FEEDBACK_QOS = dds.PROFILES["default"]
+STATUS_QOS = dds.QosProfile("reliable", "transient_local", 1)
+STATUS_ARRAY = "action_msgs/msg/GoalStatusArray"
+CANCEL_SERVICE = "action_msgs/srv/CancelGoal"
+UUID_TYPE = "unique_identifier_msgs/msg/UUID"
+_ANY_SAMPLE = 0x7F
+CANCEL_WAIT = 3.0  # after a cancel, how long to wait for the goal's final result
+
+# action_msgs/msg/GoalStatus
+STATUS_NAMES = {0: "UNKNOWN", 1: "ACCEPTED", 2: "EXECUTING", 3: "CANCELING", 4: "SUCCEEDED", 5: "CANCELED",
+                6: "ABORTED"}  # fmt: skip
+SUCCEEDED = 4
+CANCEL_ERRORS = {1: "the server rejected the cancel request", 2: "the server does not know the goal",
+                 3: "the goal already finished"}  # fmt: skip
+
+ACTION_DEFINITIONS: dict[str, str] = {
+    "example_interfaces/action/Fibonacci": "int32 order\n---\nint32[] sequence\n---\nint32[] sequence\n",
+}
+
+
+def status_name(status: int) -> str:
+    return STATUS_NAMES.get(status, f"status {status}")
+
+
+def action_store_name(action_type: str) -> str:
+    """`pkg/Name` or `pkg/action/Name` -> `pkg/action/Name`."""
+    parts = action_type.strip().strip("/").split("/")
+    if len(parts) == 2 or (len(parts) == 3 and parts[1] == "action"):
+        return f"{parts[0]}/action/{parts[-1]}"
+    raise RostoolError(f"bad action type {action_type!r}: use pkg/action/Name (or pkg/Name)")
+
+
+@dataclass(frozen=True)
+class ActionTypes:
+    """Store names of one action's types."""
+
+    name: str  # pkg/action/Name
+
+    def part(self, suffix: str) -> str:
+        return f"{self.name}_{suffix}"
+
+    @property
+    def send_goal(self) -> str:
+        return self.part("SendGoal")
+
+    @property
+    def get_result(self) -> str:
+        return self.part("GetResult")
+
+    @property
+    def feedback_message(self) -> str:
+        return self.part("FeedbackMessage")
+
+
+def register_action(types: TypeSupport, action_type: str, text: str | None = None) -> ActionTypes:
+    """Make an action's goal, result, feedback and derived service/message types known to the store."""
+    name = action_store_name(action_type)
+    found = ActionTypes(name)
+    if types.knows(found.feedback_message):
+        return found
+    text = text if text is not None else ACTION_DEFINITIONS.get(name)
+    if text is None:
+        raise RostoolError(
+            f"unknown action type {action_type!r}: rostool knows {', '.join(sorted(ACTION_DEFINITIONS))}"
+        )
+    parts = ("\n" + text).split("\n---\n")
+    if len(parts) != 3:
+        raise RostoolError(f"the definition of {name} needs goal, result and feedback separated by ---")
+    pkg, _, short = name.split("/")
+    typs: dict[str, Any] = {}
+    for suffix, body in zip(("Goal", "Result", "Feedback"), parts, strict=True):
+        # rosbags' .msg parser names types `pkg/msg/...`; parse there, then file under `pkg/action/`
+        parsed = get_types_from_msg(body + "\n", f"{pkg}/msg/{short}_{suffix}")
+        typs[found.part(suffix)] = parsed.pop(f"{pkg}/msg/{short}_{suffix}")
+        typs.update(parsed)
+
+    def ref(type_name: str) -> Any:
+        return (Nodetype.NAME, type_name)
+
+    goal_id = ("goal_id", ref(UUID_TYPE))
+    typs[found.send_goal + "_Request"] = ([], [goal_id, ("goal", ref(found.part("Goal")))])
+    stamp = ("stamp", ref("builtin_interfaces/msg/Time"))
+    typs[found.send_goal + "_Response"] = ([], [("accepted", (Nodetype.BASE, ("bool", 0))), stamp])
+    typs[found.get_result + "_Request"] = ([], [goal_id])
+    status = ("status", (Nodetype.BASE, ("int8", 0)))
+    typs[found.get_result + "_Response"] = ([], [status, ("result", ref(found.part("Result")))])
+    typs[found.feedback_message] = ([], [goal_id, ("feedback", ref(found.part("Feedback")))])
+    types.register(typs)
+    return found
+
+
+def split_action_service(service: str) -> tuple[str, str] | None:
+    """`/fibonacci/_action/send_goal` -> ('/fibonacci', 'send_goal'); None for other services."""
+    action, infix, rest = service.rpartition(ACTION_INFIX)
+    return (action, rest) if infix and action and "/" not in rest else None
+
+
+@dataclass
+class ActionSummary:
+    name: str
+    type: str
+    servers: list[str]
+    clients: list[str]
+
+
+def list_actions(graph: Ros2Graph) -> list[ActionSummary]:
+    """Actions with a server (a reader of `ACTION/_action/send_goal` requests), with clients."""
+    found: dict[str, ActionSummary] = {}
+    for name, type_, servers, clients in graph.service_endpoints():
+        split = split_action_service(name)
+        if split is None or split[1] != "send_goal":
+            continue
+        action_type = type_.removesuffix("_SendGoal")
+        found[split[0]] = ActionSummary(split[0], action_type, servers, clients)
+    return [found[name] for name in sorted(found)]
+
+
+@dataclass
+class GoalEvent:
+    kind: str  # "feedback" or "result"
+    status: int
+    message: Any = None  # the feedback or result message
+    text: str = ""
+
+    @property
+    def status_name(self) -> str:
+        return status_name(self.status)
+
+
+@dataclass
+class GoalOutcome:
+    goal_id: str
+    status: int | None
+    result: Any = None
+    canceled: bool = False
+
+    @property
+    def succeeded(self) -> bool:
+        return self.status == SUCCEEDED
+
+
+class GoalTimeout(RostoolError):
+    pass
+
+
+class ActionClient:
+    """Sends goals to one action server, follows their feedback and result, cancels them."""
+
+    def __init__(self, session: Session, action: str, action_type: str) -> None:
+        self.action = resolve(action)
+        self.types = register_action(session.types, action_type)
+        self._store = session.types
+        base = self.action + ACTION_INFIX
+        self._send_goal = ServiceClient(session, base + "send_goal", self.types.send_goal)
+        self._get_result = ServiceClient(session, base + "get_result", self.types.get_result)
+        self._cancel = ServiceClient(session, base + "cancel_goal", CANCEL_SERVICE)
+        self._feedback = session.reader(
+            topic_to_dds(base + "feedback"), self.types.feedback_message, FEEDBACK_QOS
+        )
+
+    def build_goal(self, value: Any) -> Any:
+        from rostool.interfaces.fill import FillError, build_message
+
+        try:
+            return build_message(self._store.store, self.types.part("Goal"), value)
+        except FillError as err:
+            raise RostoolError(f"{err} (the goal of {self.types.name})") from err
+
+    def wait_for_server(self, timeout: float) -> bool:
+        deadline = time.monotonic() + timeout
+        for client in (self._send_goal, self._get_result, self._cancel):
+            if not client.wait_for_server(max(deadline - time.monotonic(), 0.0)):
+                return False
+        while self._feedback.get_subscription_matched_status().current_count == 0:
+            if time.monotonic() >= deadline:
+                return False
+            time.sleep(0.02)
+        return True
+
+    def send(self, goal: Any, timeout: float) -> tuple[bytes, bool]:
+        """Send a goal with a fresh UUID; (goal id, accepted)."""
+        from rostool.interfaces.fill import build_message
+
+        goal_id = uuid.uuid4().bytes
+        request = build_message(
+            self._store.store, self.types.send_goal + "_Request", {"goal_id": {"uuid": list(goal_id)}}
+        )
+        request.goal = goal
+        response = self._send_goal.call(request, timeout)
+        return goal_id, bool(response.accepted)
+
+    def result(self, goal_id: bytes, timeout: float) -> Any:
+        """Ask for the goal's result; the server replies when the goal is done (status, result)."""
+        from rostool.interfaces.fill import build_message
+
+        request = build_message(
+            self._store.store, self.types.get_result + "_Request", {"goal_id": {"uuid": list(goal_id)}}
+        )
+        return self._get_result.call(request, timeout)
+
+    def cancel(self, goal_id: bytes, timeout: float = 5.0) -> Any:
+        from rostool.interfaces.fill import build_message
+
+        info = {"goal_id": {"uuid": list(goal_id)}}  # a zero stamp: this goal only
+        request = build_message(self._store.store, CANCEL_SERVICE + "_Request", {"goal_info": info})
+        return self._cancel.call(request, timeout)
+
+    def take_feedback(self, goal_id: bytes) -> list[Any]:
+        """Feedback messages for `goal_id` received since the last call."""
+        from cyclonedds._clayer import ddspy_take  # type: ignore[import-not-found]
+
+        found = []
+        samples = ddspy_take(self._feedback._ref, _ANY_SAMPLE, 256)
+        for data, info in [] if isinstance(samples, int) else samples:
+            if not info.valid_data:
+                continue
+            message = self._store.deserialize(data, self.types.feedback_message)
+            if bytes(message.goal_id.uuid) == goal_id:
+                found.append(message.feedback)
+        return found
+
+
+def send_goal(
+    graph: Ros2Graph,
+    name: str,
+    type_name: str | None,
+    value: Any,
+    timeout: float | None = None,
+    on_event: Callable[[GoalEvent], None] | None = None,
+    on_sent: Callable[[str, Any, bool], None] | None = None,
+    on_waiting: Callable[[str], None] | None = None,
+    on_cancel: Callable[[str], None] | None = None,
+) -> GoalOutcome:
+    """`ros2 action send_goal`: the goal is canceled first on timeout or Ctrl+C."""
+    action = resolve(name)
+    if type_name is None:
+        found = next((a for a in list_actions(graph) if a.name == action), None)
+        if found is None:
+            raise RostoolError(
+                f"unknown action {action}: no server announces it (see `rostool action list`); "
+                "give its TYPE after the name to wait for a server"
+            )
+        type_name = found.type
+    client = ActionClient(graph.session, action, type_name)
+    goal = client.build_goal(value)  # bad values fail here, before anything is sent
+    started = time.monotonic()
+    limit = timeout if timeout is not None else float("inf")
+    if not client.wait_for_server(min(limit, 1.0)):
+        if on_waiting is not None:
+            on_waiting("Waiting for an action server to become available...")
+        if not client.wait_for_server(max(limit - (time.monotonic() - started), 0.0)):
+            raise RostoolError(f"no action server for {action} matched within {timeout:g} s")
+    goal_id, accepted = client.send(goal, max(limit - (time.monotonic() - started), 0.01))
+    hex_id = goal_id.hex()
+    if on_sent is not None:
+        on_sent(hex_id, goal, accepted)
+    if not accepted:
+        return GoalOutcome(hex_id, None)
+    box: dict[str, Any] = {}
+    # An Event, not Thread.join: a join interrupted by Ctrl+C marks the thread finished (bpo-45274 fix)
+    finished = threading.Event()
+
+    def fetch() -> None:
+        try:
+            box["response"] = client.result(goal_id, float("inf"))
+        except RostoolError as err:  # pragma: no cover - the server vanished
+            box["error"] = err
+        finally:
+            finished.set()
+
+    threading.Thread(target=fetch, name=f"result of {action}", daemon=True).start()
+    try:
+        while not finished.wait(0.02):
+            for feedback in client.take_feedback(goal_id):
+                if on_event is not None:
+                    on_event(GoalEvent("feedback", 2, feedback))
+            if time.monotonic() - started > limit and not finished.is_set():
+                raise GoalTimeout(f"goal {hex_id} got no result within {timeout:g} s; canceled it")
+    except (KeyboardInterrupt, GoalTimeout):
+        if on_cancel is not None:
+            on_cancel(hex_id)
+        response = client.cancel(goal_id)
+        if response.return_code != 0 or not response.goals_canceling:
+            why = CANCEL_ERRORS.get(response.return_code, f"return code {response.return_code}")
+            raise RostoolError(f"canceling goal {hex_id} failed: {why}") from None
+        finished.wait(CANCEL_WAIT)  # the server's answer to get_result says how the goal ended
+        final = box.get("response")
+        if final is not None and on_event is not None:
+            on_event(GoalEvent("result", int(final.status), final.result))
+        raise
+    if "error" in box:
+        raise box["error"]
+    response = box["response"]
+    for feedback in client.take_feedback(goal_id):  # feedback that came with the result
+        if on_event is not None:
+            on_event(GoalEvent("feedback", 2, feedback))
+    if on_event is not None:
+        on_event(GoalEvent("result", int(response.status), response.result))
+    return GoalOutcome(hex_id, int(response.status), response.result)
