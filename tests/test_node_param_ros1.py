@@ -32,13 +32,13 @@ def test_node_list_info_ping_kill(debian_master: dict[str, str], tmp_path: Path)
     sub = start_rospy_script(HELLO_SUBSCRIBER, env, tmp_path, "listener")
     try:
         assert wait_until(
-            lambda: "/hello_world_sub_node" in rostool(["node", "list"], env).stdout.split(), 20
+            lambda: "/hello_world_sub_node" in rostool(["node", "list"], env).stdout.split(), 30
         )
         names = rostool(["node", "list"], env).stdout.split()
         assert names == debian(["rosnode", "list"], env).stdout.split()
         assert {"/hello_world_pub_node", "/hello_world_sub_node"} <= set(names)
         assert wait_until(
-            lambda: "Connections:" in rostool(["node", "info", "/hello_world_pub_node"], env).stdout
+            lambda: "Connections:" in rostool(["node", "info", "/hello_world_pub_node"], env).stdout, 30
         )
         info = rostool(["node", "info", "/hello_world_pub_node"], env).stdout
         theirs = debian(["rosnode", "info", "/hello_world_pub_node"], env).stdout

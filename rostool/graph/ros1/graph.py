@@ -79,6 +79,8 @@ class Ros1Graph:
             bus = call(uri, "getBusInfo", self.master.caller_id, what=f"node {name}", timeout=3)
             for entry in bus:
                 _cid, peer, direction, transport, topic = entry[:5]
+                if len(entry) > 5 and not entry[5]:
+                    continue  # not connected (yet): rosnode leaves these out too
                 connections.append(
                     Connection(topic, peer, "outbound" if direction == "o" else "inbound", transport)
                 )
