@@ -12,25 +12,16 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 VENV_PYTHON = str(ROOT / ".venv" / "bin" / "python")
+sys.path.insert(0, str(ROOT))
 
+# The benchmarks use the tests' loopback helpers, so both start peers the same way.
+from tests.support import debian_env, free_port, ros1_env  # noqa: E402
 
-def free_port() -> int:
-    with socket.socket() as sock:
-        sock.bind(("127.0.0.1", 0))
-        return int(sock.getsockname()[1])
+__all__ = ["debian_env", "free_port", "ros1_env"]
 
 
 def loopback_env(port: int) -> dict[str, str]:
-    env = {k: v for k, v in os.environ.items() if not k.startswith("ROS") and k != "PYTHONPATH"}
-    env.update(ROS_MASTER_URI=f"http://127.0.0.1:{port}", ROS_HOSTNAME="127.0.0.1", PYTHONUNBUFFERED="1")
-    env["ROS_HOME"] = env["ROS_LOG_DIR"] = "/tmp/rostool-bench-ros"
-    return env
-
-
-def debian_env(env: dict[str, str]) -> dict[str, str]:
-    clean = {k: v for k, v in env.items() if k not in ("VIRTUAL_ENV", "PYTHONHOME")}
-    clean["PATH"] = "/usr/bin:/bin"
-    return clean
+    return ros1_env(port, Path("/tmp/rostool-bench-ros"))
 
 
 def start_master(env: dict[str, str]) -> subprocess.Popen[bytes]:

@@ -15,7 +15,6 @@ from __future__ import annotations
 import argparse
 import os
 import resource
-import socket
 import statistics
 import struct
 import subprocess
@@ -27,26 +26,9 @@ import xmlrpc.client
 from pathlib import Path
 from typing import Any
 
-DEBIAN_PATH = "/usr/bin:/bin"
+from _graph import debian_env, free_port, ros1_env
+
 T0 = 1_700_000_000_000_000_000
-
-
-def free_port() -> int:
-    with socket.socket() as sock:
-        sock.bind(("127.0.0.1", 0))
-        return int(sock.getsockname()[1])
-
-
-def ros_env(port: int, home: Path) -> dict[str, str]:
-    env = {k: v for k, v in os.environ.items() if not k.startswith("ROS")}
-    env.update(ROS_MASTER_URI=f"http://127.0.0.1:{port}", ROS_HOSTNAME="127.0.0.1", ROS_HOME=str(home))
-    return env
-
-
-def debian_env(env: dict[str, str]) -> dict[str, str]:
-    clean = {k: v for k, v in env.items() if k not in ("PYTHONPATH", "PYTHONHOME", "VIRTUAL_ENV")}
-    clean["PATH"] = DEBIAN_PATH
-    return clean
 
 
 def write_bag(path: Path, rate_hz: int, seconds: float) -> int:
@@ -111,7 +93,7 @@ def main() -> None:
         bag = work / "numbers.bag"
         count = write_bag(bag, args.rate_hz, args.seconds)
         port = free_port()
-        env = ros_env(port, work)
+        env = ros1_env(port, work)
         os.environ.update({k: v for k, v in env.items() if k.startswith("ROS")})
         master = subprocess.Popen(
             ["rosmaster", "--core", "-p", str(port)],

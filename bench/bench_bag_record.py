@@ -20,7 +20,6 @@ from __future__ import annotations
 import argparse
 import os
 import signal
-import socket
 import statistics
 import subprocess
 import sys
@@ -30,7 +29,7 @@ import xmlrpc.client
 from pathlib import Path
 from typing import Any
 
-DEBIAN_PATH = "/usr/bin:/bin"
+from _graph import debian_env, free_port
 
 PUBLISHER = """
 import sys, time
@@ -69,18 +68,6 @@ elapsed = time.time() - start
 print('%d %.6f' % (sent, elapsed), flush=True)
 time.sleep(2.0)
 """
-
-
-def free_port() -> int:
-    with socket.socket() as sock:
-        sock.bind(("127.0.0.1", 0))
-        return int(sock.getsockname()[1])
-
-
-def debian_env(env: dict[str, str]) -> dict[str, str]:
-    clean = {k: v for k, v in env.items() if k not in ("PYTHONPATH", "PYTHONHOME", "VIRTUAL_ENV")}
-    clean["PATH"] = DEBIAN_PATH
-    return clean
 
 
 def subscribers(uri: str) -> int:

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import socket
 import subprocess
 import sys
 import tempfile
@@ -20,13 +19,7 @@ import xmlrpc.client
 from collections.abc import Callable
 from typing import Any
 
-DEBIAN_PATH = "/usr/bin:/bin"
-
-
-def free_port() -> int:
-    with socket.socket() as sock:
-        sock.bind(("127.0.0.1", 0))
-        return int(sock.getsockname()[1])
+from _graph import debian_env, free_port
 
 
 def answers(uri: str) -> bool:
@@ -92,9 +85,9 @@ def main() -> None:
     home = tempfile.mkdtemp(prefix="bench_core_")
     base = {k: v for k, v in os.environ.items() if not k.startswith("ROS")}
     base.update(ROS_HOSTNAME="127.0.0.1", ROS_HOME=home)
-    debian_env = {k: v for k, v in base.items() if k not in ("PYTHONPATH", "PYTHONHOME", "VIRTUAL_ENV")}
-    debian_env["PATH"] = DEBIAN_PATH
-    theirs = measure("rosmaster", lambda port: ["rosmaster", "--core", "-p", str(port)], debian_env, args)
+    theirs = measure(
+        "rosmaster", lambda port: ["rosmaster", "--core", "-p", str(port)], debian_env(base), args
+    )
     ours = measure(
         "rostool", lambda port: [sys.executable, "-m", "rostool", "core", "--port", str(port)], base, args
     )
