@@ -81,7 +81,11 @@ def master_answers(uri: str) -> bool:
 
 
 def rostool(
-    args: Sequence[str], env: dict[str, str], timeout: float = 30, input: str | None = None
+    args: Sequence[str],
+    env: dict[str, str],
+    timeout: float = 30,
+    input: str | None = None,
+    cwd: Path | None = None,
 ) -> subprocess.CompletedProcess[str]:
     """Run the installed rostool CLI as a user would."""
     return subprocess.run(
@@ -91,6 +95,7 @@ def rostool(
         text=True,
         timeout=timeout,
         input=input,
+        cwd=cwd,
     )
 
 

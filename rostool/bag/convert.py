@@ -25,6 +25,7 @@ from typing import Any, Literal
 from rosbags.interfaces import Connection, ConnectionExtRosbag1, ConnectionExtRosbag2
 from rosbags.typesys.store import Typestore
 
+from rostool.bag.crossver import CrossVersionStores
 from rostool.bag.open import BagInput, detect
 from rostool.bag.reader import BagReader, describe
 from rostool.bag.typestores import DEFAULT_DISTRO
@@ -216,7 +217,7 @@ class _Sink:
         self.src_version = reader.ros_version
         self.dst_version = output.ros_version
         self.connections: dict[int, tuple[Connection, Callable[[Any], Any]]] = {}
-        self._dst_stores: dict[int, Typestore] = {}
+        self._dst_stores = CrossVersionStores(self.dst_version)
         self.writer: Any
         with _writing(path):
             if output.storage == "bag":
@@ -320,22 +321,7 @@ class _Sink:
         return dst, partial(store.cdr_to_ros1, typename=conn.msgtype)
 
     def _dst_store(self, src: Typestore, src_msgtype: str, dst_msgtype: str) -> Typestore:
-        """Source types with the other side's std_msgs/Header (the ROS 1 one has `seq`), as rosbags does."""
-        from rosbags.typesys import Stores, get_types_from_msg, get_typestore
-
-        store = self._dst_stores.get(id(src))
-        if store is None:
-            other = Stores.ROS2_FOXY if self.dst_version == 2 else Stores.ROS1_NOETIC
-            header = get_typestore(other).fielddefs["std_msgs/msg/Header"]
-            store = get_typestore(Stores.EMPTY)
-            store.register({**src.fielddefs, "std_msgs/msg/Header": header})
-            self._dst_stores[id(src)] = store
-        if dst_msgtype not in store.fielddefs:
-            text = src.generate_msgdef(src_msgtype, ros_version=self.dst_version)[0]
-            typs = get_types_from_msg(text, dst_msgtype)
-            typs.pop("std_msgs/msg/Header", None)
-            store.register(typs)
-        return store
+        return self._dst_stores.store_for(src, src_msgtype, dst_msgtype)
 
     def close(self) -> None:
         with _writing(self.output.path):

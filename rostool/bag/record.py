@@ -26,12 +26,10 @@ from pathlib import Path
 from types import FrameType
 from typing import Any, Literal, Protocol
 
+from rostool.bag.crossver import CrossVersionStores, ros2_store
 from rostool.bag.ros1_writer import BagWriter, WriteFailed
+from rostool.bag.sources import RecordSource
 from rostool.errors import RostoolError
-from rostool.graph.ros1.graph import Ros1Graph
-from rostool.graph.ros1.names import resolve
-from rostool.graph.ros1.topics import InboundLink
-from rostool.interfaces.ros1 import TypeRegistry
 
 Format = Literal["bag", "mcap", "db3"]
 SUFFIXES: dict[str, Format] = {".bag": "bag", ".mcap": "mcap", ".db3": "db3"}
@@ -51,6 +49,7 @@ class RecordOptions:
     duration: float | None = None  # total, or per file with split
     size: int | None = None  # bytes: stop, or per file with split
     split: bool = False
+    default_fmt: Format = "bag"  # without -O/-o suffix or --format
     buffer_bytes: int = 256 * 1024 * 1024
     compression: str = "none"
     force: bool = False
@@ -86,7 +85,7 @@ def output_format(options: RecordOptions) -> Format:
         if by_name is not None and by_name != options.fmt and options.output_name:
             raise RostoolError(f"{given}: the name says {by_name} but --format says {options.fmt}")
         return options.fmt
-    return by_name or "bag"
+    return by_name or options.default_fmt
 
 
 def target_name(
@@ -148,9 +147,9 @@ def _open_failure(path: Path, err: OSError) -> RostoolError:
 
 
 class Ros1Sink:
-    """One ROS 1 bag: raw bytes with the publisher's connection header."""
+    """One ROS 1 bag: ROS 1 bytes with the publisher's connection header, or ROS 2 CDR converted."""
 
-    def __init__(self, final: Path, compression: str, force: bool) -> None:
+    def __init__(self, final: Path, compression: str, force: bool, source: RecordSource) -> None:
         self.final = final
         self.active = active_name(final)
         if force:
@@ -160,7 +159,9 @@ class Ros1Sink:
             self.writer = BagWriter(self.active, compression)
         except OSError as err:
             raise _open_failure(self.active, err) from err
-        self._conns: dict[object, int] = {}
+        self.source = source
+        self._stores = CrossVersionStores(1)
+        self._conns: dict[object, tuple[int, Callable[[bytes], Any] | None] | None] = {}
         self.problems: dict[str, str] = {}
 
     @property
@@ -168,11 +169,32 @@ class Ros1Sink:
         return self.writer.size
 
     def write(self, key: object, header: Mapping[str, str], time_ns: int, payload: bytes) -> bool:
-        conn = self._conns.get(key)
-        if conn is None:
-            conn = self._conns[key] = self.writer.connection(header)
+        entry = self._conns.get(key, False)
+        if entry is False:
+            entry = self._conns[key] = self._add(header)
+        if entry is None:
+            return False
+        conn, convert = entry
+        if convert is not None:
+            try:
+                payload = convert(payload)
+            except Exception as err:  # bytes that do not match the announced type
+                self.problems.setdefault(header["topic"], f"cannot convert a {header['type']} message: {err}")
+                return False
         self.writer.write(conn, time_ns, payload)
         return True
+
+    def _add(self, header: Mapping[str, str]) -> tuple[int, Callable[[bytes], Any] | None] | None:
+        if self.source.encoding == "ros1":
+            return self.writer.connection(header), None
+        from rostool.bag.sources import ros1_header_for_cdr
+
+        try:
+            ros1_header, convert = ros1_header_for_cdr(dict(header), self.source.store, self._stores)
+        except Exception as err:  # a type rosbags cannot express in ROS 1
+            self.problems[header["topic"]] = f"cannot write {header['type']} to a ROS 1 bag: {err}"
+            return None
+        return self.writer.connection(ros1_header), convert
 
     def flush(self) -> None:
         self.writer.flush()
@@ -189,16 +211,17 @@ class Ros1Sink:
 
 
 class Ros2Sink:
-    """One .mcap or .db3 file: messages converted to CDR with ROS 2 type names (rosbags' writer)."""
+    """One .mcap or .db3 file (rosbags' writer): ROS 2 CDR as received, or ROS 1 messages converted to CDR
+    with ROS 2 type names."""
 
-    def __init__(self, final: Path, fmt: Format, types: TypeRegistry, force: bool) -> None:
+    def __init__(self, final: Path, fmt: Format, source: RecordSource, force: bool) -> None:
         from rosbags.rosbag2 import StoragePlugin
         from rosbags.rosbag2 import Writer as Writer2
 
         self.final = final
         self.active = active_name(final)
         self.fmt = fmt
-        self.types = types
+        self.source = source
         if force and self.active.is_dir():
             shutil.rmtree(self.active)
         plugin = StoragePlugin.MCAP if fmt == "mcap" else StoragePlugin.SQLITE3
@@ -239,15 +262,20 @@ class Ros2Sink:
 
         from rosbags.convert.converter import LATCH, STATIC_MSGTYPE_RENAMES
 
+        qos = list(LATCH) if header.get("latching") == "1" else []
         try:
-            msg_type = self.types.resolve(
+            if self.source.encoding == "cdr":
+                conn = self.writer.add_connection(
+                    header["topic"], header["type"], typestore=self.source.store, offered_qos_profiles=qos
+                )
+                return conn, _unchanged
+            msg_type = self.source.types.resolve(
                 header.get("type", ""), header.get("md5sum", "*"), header.get("message_definition")
             )
             msgtype = STATIC_MSGTYPE_RENAMES.get(msg_type.store_name, msg_type.store_name)
-            store = _ros2_store(msg_type.store, msg_type.store_name, msgtype)
-            qos = LATCH if header.get("latching") == "1" else []
+            store = ros2_store(msg_type.store, msg_type.store_name, msgtype)
             conn = self.writer.add_connection(
-                header["topic"], msgtype, typestore=store, offered_qos_profiles=list(qos)
+                header["topic"], msgtype, typestore=store, offered_qos_profiles=qos
             )
         except Exception as err:  # a type rosbags cannot express in ROS 2
             self.problems[header["topic"]] = f"cannot write {header.get('type')} to a ROS 2 bag: {err}"
@@ -277,19 +305,11 @@ class Ros2Sink:
         shutil.rmtree(self.active, ignore_errors=True)
 
 
-def _ros2_store(src: Any, src_msgtype: str, dst_msgtype: str) -> Any:
-    """The ROS 1 types with ROS 2's std_msgs/Header (no `seq`), as rosbags' converter builds them."""
-    from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+def _unchanged(payload: bytes) -> bytes:
+    return payload
 
-    header = get_typestore(Stores.ROS2_FOXY).fielddefs["std_msgs/msg/Header"]
-    store = get_typestore(Stores.EMPTY)
-    store.register({**src.fielddefs, "std_msgs/msg/Header": header})
-    if dst_msgtype not in store.fielddefs:
-        text = src.generate_msgdef(src_msgtype, ros_version=2)[0]
-        typs = get_types_from_msg(text, dst_msgtype)
-        typs.pop("std_msgs/msg/Header", None)
-        store.register(typs)
-    return store
+
+_ros2_store = ros2_store  # the name play_ros2 imported before crossver existed
 
 
 # -- the queue between network threads and the writer --------------------------------------------
@@ -298,34 +318,34 @@ class _Queue:
 
     def __init__(self, limit: int) -> None:
         self.limit = limit
-        self.items: collections.deque[tuple[InboundLink, int, bytes]] = collections.deque()
+        self.items: collections.deque[tuple[str, Any, int, bytes]] = collections.deque()
         self.bytes = 0
         self.dropped: collections.Counter[str] = collections.Counter()
         self.lock = threading.Lock()
         self.ready = threading.Event()
         self.accepting = True
 
-    def put(self, payload: bytes, link: InboundLink) -> None:
+    def put(self, topic: str, payload: bytes, origin: Any) -> None:
         now = time.time_ns()
         if not self.accepting:
             return
         size = len(payload)
         with self.lock:
             if self.bytes + size > self.limit:
-                self.dropped[link.subscription.topic] += 1
+                self.dropped[topic] += 1
                 return
             self.bytes += size
-        self.items.append((link, now, payload))
+        self.items.append((topic, origin, now, payload))
         if not self.ready.is_set():
             self.ready.set()
 
-    def take(self) -> list[tuple[InboundLink, int, bytes]]:
+    def take(self) -> list[tuple[str, Any, int, bytes]]:
         items = self.items
         batch = []
         while items:
             batch.append(items.popleft())
         if batch:
-            freed = sum(len(item[2]) for item in batch)
+            freed = sum(len(item[3]) for item in batch)
             with self.lock:
                 self.bytes -= freed
         return batch
@@ -333,13 +353,12 @@ class _Queue:
 
 # -- the recorder --------------------------------------------------------------------------------
 class Recorder:
-    def __init__(self, graph: Ros1Graph, options: RecordOptions) -> None:
+    def __init__(self, source: RecordSource, options: RecordOptions) -> None:
         if not options.topics and not options.all_topics:
             raise RostoolError("no topics to record: name them, or use -a (all) or -e REGEX")
         if options.split and options.size is None and options.duration is None:
             raise RostoolError("--split needs --size MB or --duration D")
-        self.graph = graph
-        self.types = graph.types
+        self.source = source
         self.options = options
         self.fmt = output_format(options)
         self.patterns = [_compile(p) for p in options.topics] if options.regex else []
@@ -354,7 +373,7 @@ class Recorder:
         self._limit_reached = threading.Event()
         self._stop = threading.Event()
         self._finishing = threading.Event()
-        self._headers: dict[InboundLink, tuple[object, dict[str, str]]] = {}
+        self._headers: dict[tuple[str, Any], tuple[object, dict[str, str]]] = {}
         self._opened = threading.Event()
         self._open_error: RostoolError | None = None
         self._topics_seen: set[str] = set()
@@ -366,9 +385,9 @@ class Recorder:
         path = target_name(self.options, self.fmt, self._split_index)
         _check_target(path, self.options.force)
         if self.fmt == "bag":
-            sink: Sink = Ros1Sink(path, self.options.compression, self.options.force)
+            sink: Sink = Ros1Sink(path, self.options.compression, self.options.force, self.source)
         else:
-            sink = Ros2Sink(path, self.fmt, self.types, self.options.force)
+            sink = Ros2Sink(path, self.fmt, self.source, self.options.force)
         self._file_start = None
         self._written_in_file = 0
         return sink
@@ -395,14 +414,10 @@ class Recorder:
         if topic in self._subscribed:
             return
         self._subscribed.add(topic)
-        self.graph.node.subscribe(topic, self.queue.put)
+        self.source.subscribe(topic, self.queue.put)
 
     def _discover(self) -> None:
-        try:
-            published = self.graph.master.published_topics()
-        except RostoolError:
-            return  # the master is away: keep recording what is subscribed (as rosbag does)
-        for topic in published:
+        for topic in self.source.published_topics():
             if topic not in self._subscribed and self._wanted(topic):
                 self._subscribe(topic)
 
@@ -416,10 +431,10 @@ class Recorder:
                 queue.ready.wait(FLUSH_INTERVAL)
                 queue.ready.clear()
                 batch = queue.take()
-                for link, stamp, payload in batch:
+                for topic, origin, stamp, payload in batch:
                     if self._limit_reached.is_set():
                         break
-                    self._write_one(link, stamp, payload)
+                    self._write_one(topic, origin, stamp, payload)
                 now = time.monotonic()
                 if self._sink is not None and (not batch or now - last_flush >= FLUSH_INTERVAL):
                     self._sink.flush()
@@ -434,21 +449,11 @@ class Recorder:
             self._failure = f"internal error: {type(err).__name__}: {err}"
         self.queue.accepting = False
 
-    def _write_one(self, link: InboundLink, stamp: int, payload: bytes) -> None:
-        known = self._headers.get(link)
+    def _write_one(self, topic: str, origin: Any, stamp: int, payload: bytes) -> None:
+        known = self._headers.get((topic, origin))
         if known is None:
-            header = link.header
-            topic = link.subscription.topic
-            fields = {
-                "topic": topic,
-                "type": header.get("type", "*"),
-                "md5sum": header.get("md5sum", "*"),
-                "message_definition": header.get("message_definition", ""),
-                "callerid": header.get("callerid", link.publisher_uri),
-                "latching": header.get("latching", "0"),
-            }
-            key = tuple(fields.values())
-            known = self._headers[link] = (key, fields)
+            fields = self.source.describe(topic, origin)
+            known = self._headers[topic, origin] = (tuple(fields.values()), fields)
         key, fields = known
         options = self.options
         if options.split and options.duration is not None and self._file_start is not None:
@@ -460,7 +465,6 @@ class Recorder:
             return
         if self._file_start is None:
             self._file_start = stamp
-        topic = fields["topic"]
         if sink.write(key, fields, stamp, payload):
             counts = self.result.counts
             counts[topic] = counts.get(topic, 0) + 1
@@ -500,7 +504,7 @@ class Recorder:
         try:
             if not options.regex:
                 for topic in options.topics:
-                    name = resolve(topic)
+                    name = self.source.resolve(topic)
                     if self.exclude is None or not self.exclude.fullmatch(name):
                         self._subscribe(name)
             started = time.monotonic()
@@ -522,7 +526,7 @@ class Recorder:
                 stop.wait(wait)
         finally:
             self.queue.accepting = False
-            self.graph.close()  # unregister now; nothing more arrives
+            self.source.close()  # unregister now; nothing more arrives
             self._finishing.set()
             self.queue.ready.set()
             writer.join()

@@ -13,9 +13,12 @@ from typing import TYPE_CHECKING, Any
 import click
 
 from rostool.bag.typestores import DEFAULT_DISTRO, DISTROS
+from rostool.commands._qos import qos_options, use_qos
 from rostool.errors import RostoolError
+from rostool.graph.ros2.dds import QosRequest
 
 if TYPE_CHECKING:
+    from rostool.bag.sources import RecordSource
     from rostool.graph.ros1.graph import Ros1Graph
     from rostool.graph.ros2.graph import Ros2Graph
 
@@ -418,23 +421,11 @@ def _play_arguments(args: Sequence[str], with_topics: bool) -> tuple[list[str], 
     return paths, remaps, topics
 
 
-_NEEDS_ROS1 = (
-    "bag record works with a ROS 1 graph only for now: point ROS_MASTER_URI at a ROS 1 "
-    "master (or pass --ros1)"
-)
-
-
 def _selected_version(ctx: click.Context) -> int:
     from rostool.commands._common import ros_version
     from rostool.graph import select_ros_version
 
     return select_ros_version(ros_version(ctx))
-
-
-def _require_ros1(ctx: click.Context) -> None:
-    """Before opening anything: a ROS 2 graph (chosen or detected) is not what record talks to."""
-    if _selected_version(ctx) != 1:
-        raise RostoolError(_NEEDS_ROS1)
 
 
 def _ros2(graph: object) -> Ros2Graph:
@@ -449,8 +440,23 @@ def _ros1(graph: object) -> Ros1Graph:
     from rostool.graph.ros1.graph import Ros1Graph
 
     if not isinstance(graph, Ros1Graph):
-        raise RostoolError(_NEEDS_ROS1)
+        raise RostoolError("bag play into ROS 1 needs a ROS 1 graph (--ros1 or ROS_MASTER_URI)")
     return graph
+
+
+def _record_source(graph: object, progress: _RecordProgress | None) -> RecordSource:
+    from rostool.bag.sources import Ros1Source, Ros2Source
+    from rostool.graph.ros2.graph import Ros2Graph
+
+    if isinstance(graph, Ros2Graph):
+
+        def warn(text: str) -> None:
+            if progress is not None:
+                progress.end()
+            click.echo(f"rostool: warning: {text}", err=True)
+
+        return Ros2Source(graph, warn)
+    return Ros1Source(_ros1(graph))
 
 
 # -- record --------------------------------------------------------------------------------------
@@ -488,6 +494,7 @@ def _parse_duration(text: str | None) -> float | None:
 @click.option("-j", "--bz2", "compression", flag_value="bz2", help="Compress .bag chunks with bz2.")
 @click.option("-q", "--quiet", is_flag=True, help="No progress and no summary on stderr.")
 @click.option("--force", is_flag=True, help="Overwrite an existing output file.")
+@qos_options
 @click.pass_context
 def record(
     ctx: click.Context,
@@ -505,8 +512,9 @@ def record(
     compression: str | None,
     quiet: bool,
     force: bool,
+    qos: QosRequest,
 ) -> None:
-    """Record topics of the live ROS 1 graph into a bag, until Ctrl+C (or --duration / --size).
+    """Record topics of the live graph into a bag, until Ctrl+C (or --duration / --size).
 
     Messages are stored as received, with their publisher's type and definition and the receive time.
     The bag is written as NAME.bag.active and renamed when recording ends; Ctrl+C and SIGTERM always
@@ -514,12 +522,17 @@ def record(
     NAME.bag.active` recovers all but the last 0.1 s. .mcap/.db3 outputs are ROS 2 bags (types
     converted to pkg/msg/T). With -a or -e, topics that appear later are recorded too.
 
+    From a ROS 2 graph (--ros2) the CDR bytes are stored unchanged, .mcap by default; readers adapt to
+    the publishers' QoS unless --qos-* says otherwise; -a leaves out hidden topics (/_name), as ros2 bag
+    record does. A .bag output converts the messages to ROS 1.
+
     \b
     Examples:
       rostool bag record -a -O test.bag
       rostool bag record /odom /tf -o run             # run_2024-05-01-12-00-00.bag
       rostool bag record -e '/camera/.*' -x '.*compressed.*' --split --size 1024
       rostool bag record -a --duration 30s --format mcap
+      rostool --ros2 bag record /chatter -O chatter.mcap
     """
     import threading
 
@@ -528,7 +541,6 @@ def record(
 
     if output_name and output_prefix:
         raise RostoolError("choose one of -O (exact name) and -o (prefix)")
-    _require_ros1(ctx)
     if regex and not topics:
         raise RostoolError("-e needs at least one regular expression (e.g. `-e '/camera/.*'`)")
     options = RecordOptions(
@@ -545,13 +557,15 @@ def record(
         buffer_bytes=buffsize * 1024 * 1024,
         compression=compression or "none",
         force=force,
+        default_fmt="mcap" if _selected_version(ctx) == 2 else "bag",
     )
     if compression and options.fmt not in (None, "bag"):
         raise RostoolError("--lz4/--bz2 compress ROS 1 .bag chunks; leave them out with --format mcap/db3")
     progress = None if quiet or not sys.stderr.isatty() else _RecordProgress()
     stop = threading.Event()
     with live_graph(ctx) as graph:
-        recorder = Recorder(_ros1(graph), options)
+        use_qos(graph, qos)
+        recorder = Recorder(_record_source(graph, progress), options)
         with stop_on_signals(stop):
             try:
                 result = recorder.run(stop, progress)
@@ -601,3 +615,4 @@ class _RecordProgress:
         if self._shown:
             sys.stderr.write("\n")
             sys.stderr.flush()
+            self._shown = False

@@ -2,53 +2,16 @@
 
 from __future__ import annotations
 
-import functools
 import sys
 import time
-from collections.abc import Callable
 from typing import Any
 
 import click
 
 from rostool.commands._common import interfaces_option, json_option, live_graph, print_json
+from rostool.commands._qos import qos_options, use_qos
 from rostool.errors import RostoolError
-from rostool.graph.ros2.dds import PROFILES, QosRequest
-
-_QOS_OPTIONS = (
-    click.option("--qos-profile", type=click.Choice(sorted(PROFILES)),
-                 help="ROS 2: QoS preset to start from (echo/hz default: adapt to the publishers)."),
-    click.option("--qos-reliability", type=click.Choice(["reliable", "best_effort"]), help="ROS 2 only."),
-    click.option("--qos-durability", type=click.Choice(["volatile", "transient_local"]), help="ROS 2 only."),
-    click.option("--qos-depth", type=click.IntRange(min=0), help="ROS 2: history depth (0 keeps all)."),
-)  # fmt: skip
-
-
-def qos_options(func: Callable[..., Any]) -> Callable[..., Any]:
-    """Add the ROS 2 QoS options; the command receives them as one `qos: QosRequest`."""
-
-    @functools.wraps(func)
-    def wrapper(
-        *args: Any,
-        qos_profile: str | None,
-        qos_reliability: str | None,
-        qos_durability: str | None,
-        qos_depth: int | None,
-        **kwargs: Any,
-    ) -> Any:
-        request = QosRequest(qos_profile, qos_reliability, qos_durability, qos_depth)
-        return func(*args, qos=request, **kwargs)
-
-    for option in reversed(_QOS_OPTIONS):
-        wrapper = option(wrapper)
-    return wrapper
-
-
-def _use_qos(graph: Any, request: QosRequest) -> None:
-    if not request.given:
-        return
-    if graph.ros_version != 2:
-        raise RostoolError("--qos-* options apply to ROS 2 graphs only: ROS 1 topics have no QoS")
-    graph.qos_request = request
+from rostool.graph.ros2.dds import QosRequest
 
 
 @click.group()
@@ -261,7 +224,7 @@ def echo(
     out = sys.stdout
     interactive = out.isatty()
     with live_graph(ctx) as graph:
-        _use_qos(graph, qos)
+        use_qos(graph, qos)
         renderer = EchoRenderer(mode, fields, noarr, nostr, style=graph.time_style)
         if graph.topic_type(name) is None:
             click.echo(f"WARNING: topic [{name}] does not appear to be published yet", err=True)
@@ -310,7 +273,7 @@ def hz(
     from rostool.graph.rates import RateMeter
 
     with live_graph(ctx) as graph:
-        _use_qos(graph, qos)
+        use_qos(graph, qos)
         meters = {graph.resolve(n): RateMeter(window) for n in names}
         for topic_name, meter in meters.items():
             if graph.topic_type(topic_name) is None:
@@ -392,7 +355,7 @@ def bw(ctx: click.Context, name: str, window: int, duration: float | None, qos: 
 
     meter = SizeMeter(window)
     with live_graph(ctx) as graph:
-        _use_qos(graph, qos)
+        use_qos(graph, qos)
         graph.subscribe(name, lambda r: meter.arrived(time.monotonic(), len(r.payload)))
         click.echo(f"subscribed to [{name}]")
         started = time.monotonic()
@@ -495,7 +458,7 @@ def pub(
     from rostool.graph.publishing import publish_loop
 
     with live_graph(ctx, interface_paths) as graph:
-        _use_qos(graph, qos)
+        use_qos(graph, qos)
         publish_loop(
             graph, name, type_name, values, rate=rate, once=once, latch=latch, count=count,
             file=file, say=(lambda _t: None) if quiet else click.echo,

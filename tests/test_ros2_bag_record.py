@@ -1,0 +1,169 @@
+"""`bag record` from a ROS 2 graph: what DDS delivers is stored unchanged (.mcap/.db3) or converted (.bag).
+
+Referees: rosbags' reader for the ROS 2 outputs, Debian's rosbag for the ROS 1 output, and the real ROS 2
+bytes of ../shared/testdata/ros2/talker_mcap played into the graph and compared byte for byte.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+import yaml
+
+from tests.support import TESTDATA, debian, require_ros1_peers, rostool, rostool_popen, stop, wait_until
+from tests.test_ros2_graph import ros2_env
+
+TALKER = TESTDATA / "ros2" / "talker_mcap"
+
+
+@pytest.fixture
+def env() -> dict[str, str]:
+    return ros2_env()
+
+
+@pytest.fixture
+def publishers(env: dict[str, str]) -> Iterator[None]:
+    """A String and a PoseStamped publisher, plus a latched (transient_local) String."""
+    procs = [
+        rostool_popen(["topic", "pub", "/chatter", "std_msgs/String", "data: hello", "-r", "20"], env),
+        rostool_popen(
+            ["topic", "pub", "/pose", "geometry_msgs/PoseStamped",
+             "{header: {frame_id: map}, pose: {position: {x: 1.5}}}", "-r", "10"],
+            env,
+        ),
+        rostool_popen(["topic", "pub", "--latch", "/mode", "std_msgs/String", "data: auto"], env),
+    ]  # fmt: skip
+    try:
+        assert wait_until(lambda: len(rostool(["topic", "list"], env).stdout.split()) == 3, timeout=20)
+        yield
+    finally:
+        for proc in procs:
+            stop(proc)
+
+
+def read_ros2(path: Path) -> tuple[dict[str, list[object]], dict[str, str], dict[str, int]]:
+    """Messages per topic, type per topic and durability per topic as rosbags reads them."""
+    from rosbags.highlevel import AnyReader
+
+    messages: dict[str, list[object]] = {}
+    with AnyReader([path]) as reader:
+        types = {c.topic: c.msgtype for c in reader.connections}
+        durability = {
+            c.topic: max((q.durability.value for q in c.ext.offered_qos_profiles), default=0)
+            for c in reader.connections
+        }
+        for conn, _stamp, raw in reader.messages():
+            messages.setdefault(conn.topic, []).append(reader.deserialize(raw, conn.msgtype))
+    return messages, types, durability
+
+
+@pytest.mark.parametrize("suffix", ["mcap", "db3"])
+def test_record_all_into_ros2_bags(
+    env: dict[str, str], publishers: None, tmp_path: Path, suffix: str
+) -> None:
+    out = tmp_path / f"run.{suffix}"
+    recorded = rostool(["bag", "record", "-a", "-O", str(out), "--duration", "2"], env)
+    assert recorded.returncode == 0, recorded.stderr
+    assert recorded.stderr.startswith("recorded ") and f"on 3 topics to {out}" in recorded.stderr
+    messages, types, durability = read_ros2(out)
+    assert types == {
+        "/chatter": "std_msgs/msg/String",
+        "/pose": "geometry_msgs/msg/PoseStamped",
+        "/mode": "std_msgs/msg/String",
+    }
+    assert 25 <= len(messages["/chatter"]) <= 45
+    assert {m.data for m in messages["/chatter"]} == {"hello"}  # type: ignore[attr-defined]
+    pose = messages["/pose"][0]
+    assert (pose.header.frame_id, pose.pose.position.x) == ("map", 1.5)  # type: ignore[attr-defined]
+    # the latched message arrives although it was published before recording started
+    assert [m.data for m in messages["/mode"]] == ["auto"]  # type: ignore[attr-defined]
+    assert durability["/mode"] == 1 and durability["/chatter"] == 0  # TRANSIENT_LOCAL is 1 in rosbags
+
+
+def test_default_name_is_a_dated_mcap(env: dict[str, str], publishers: None, tmp_path: Path) -> None:
+    recorded = rostool(["bag", "record", "/chatter", "--duration", "1"], env, cwd=tmp_path)
+    assert recorded.returncode == 0, recorded.stderr
+    (produced,) = tmp_path.iterdir()
+    assert produced.suffix == ".mcap" and produced.stem.count("-") == 5
+    messages, _types, _qos = read_ros2(produced)
+    assert list(messages) == ["/chatter"]
+
+
+def test_record_into_ros1_bag_read_by_debian_rosbag(
+    env: dict[str, str], publishers: None, tmp_path: Path
+) -> None:
+    require_ros1_peers()
+    out = tmp_path / "run.bag"
+    recorded = rostool(["bag", "record", "/pose", "/mode", "-O", str(out), "--duration", "1.5"], env)
+    assert recorded.returncode == 0, recorded.stderr
+    info = yaml.safe_load(debian(["rosbag", "info", "--yaml", str(out)], env).stdout)
+    assert {t["topic"]: t["type"] for t in info["topics"]} == {
+        "/pose": "geometry_msgs/PoseStamped",
+        "/mode": "std_msgs/String",
+    }
+    assert {t["type"]: t["md5"] for t in info["types"]} == {
+        "geometry_msgs/PoseStamped": "d3812c3cbc69362b77dc0b19b345f8f5",
+        "std_msgs/String": "992ce8a1687cec8c8bd883ec73ca41d1",
+    }
+    echoed = debian(["rostopic", "echo", "-b", str(out), "-n", "1", "/pose/pose/position/x"], env)
+    assert echoed.stdout.split("\n")[0] == "1.5", echoed.stderr
+
+
+def test_real_ros2_bytes_are_recorded_unchanged(env: dict[str, str], tmp_path: Path) -> None:
+    """rosbag2's /rosout and /topic samples go through DDS twice (play, record) and come out identical."""
+    from rostool.bag.reader import BagReader
+
+    out = tmp_path / "replayed.mcap"
+    recorder = rostool_popen(["bag", "record", "/rosout", "/topic", "-O", str(out)], env)
+    try:
+        time.sleep(1.5)  # the recorder's readers exist before anything is played
+        selected = ["--topics", "/rosout", "/topic"]  # rosbag's form: the bag first
+        played = rostool(["bag", "play", "-r", "4", "--wait-for-subscribers", str(TALKER), *selected], env)
+        assert played.returncode == 0, played.stderr
+        time.sleep(1.0)
+    finally:
+        _out, err = stop(recorder)
+    assert recorder.returncode == 0, err
+
+    def raw_by_topic(path: Path) -> dict[str, list[bytes]]:
+        found: dict[str, list[bytes]] = {}
+        with BagReader([path]) as reader:  # rosbags' AnyReader yields no messages of this v4 bag
+            for conn, _stamp, raw in reader.messages():
+                found.setdefault(conn.topic, []).append(bytes(raw))
+        return found
+
+    original = raw_by_topic(TALKER)
+    original.pop("/parameter_events", None)
+    assert raw_by_topic(out) == original
+
+
+def test_incompatible_qos_is_reported(env: dict[str, str], tmp_path: Path) -> None:
+    publisher = rostool_popen(
+        ["topic", "pub", "/scan_like", "std_msgs/String", "data: x", "-r", "10", "--qos-reliability",
+         "best_effort"],
+        env,
+    )  # fmt: skip
+    try:
+        recorded = rostool(
+            ["bag", "record", "/scan_like", "--qos-reliability", "reliable", "-O", str(tmp_path / "q.mcap"),
+             "--duration", "2.5"],
+            env,
+        )  # fmt: skip
+    finally:
+        stop(publisher)
+    assert recorded.returncode == 0, recorded.stderr
+    assert "incompatible policy RELIABILITY" in recorded.stderr, recorded.stderr
+    assert "recorded 0 messages" in recorded.stderr
+
+
+def test_qos_options_are_refused_on_ros1(tmp_path: Path) -> None:
+    env = ros2_env()
+    env["ROS_VERSION"] = "1"
+    env["ROS_MASTER_URI"] = "http://127.0.0.1:9"
+    refused = rostool(["bag", "record", "/x", "--qos-depth", "5", "-O", str(tmp_path / "x.bag")], env)
+    assert refused.returncode != 0
+    assert refused.stderr.count("\n") == 1, refused.stderr
+    assert not list(tmp_path.iterdir())
