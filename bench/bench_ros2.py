@@ -1,6 +1,6 @@
 """ROS 2 over DDS: `topic hz` accuracy, `topic echo` throughput, start-up to the first discovered topic.
 
-    .venv/bin/python bench/bench_ros2.py [hz|echo|startup]...
+    .venv/bin/python bench/bench_ros2.py [hz|echo|startup|record]...
 
 Loopback only (rostool's LOCALHOST discovery: 127.0.0.1, multicast off), a fresh ROS_DOMAIN_ID per run.
 No ROS 2 installation here, so there is no side-by-side ros2cli column: numbers are absolute.
@@ -140,8 +140,38 @@ def bench_startup() -> None:
         print(f"startup {label}: median {statistics.median(times):.3f} s (min {min(times):.3f} s)")
 
 
+def bench_record(count: int, rate: float) -> None:
+    """`bag record` of COUNT messages into .mcap: how many the file holds, and the recorder's CPU."""
+    import tempfile
+    from pathlib import Path
+
+    from rostool.bag.reader import BagReader
+
+    env = ros2_env()
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "bench.mcap"
+        pub = start_publisher(env, count, rate, 1)
+        recorder = subprocess.Popen(rostool_cmd("bag", "record", "/bench", "-q", "-O", str(out)), env=env,
+                                    stderr=subprocess.PIPE, text=True)  # fmt: skip
+        assert pub.stdout is not None
+        sent = pub.stdout.readline().strip()
+        time.sleep(1.0)
+        cpu = cpu_seconds(recorder.pid)
+        recorder.send_signal(signal.SIGINT)
+        _out, err = recorder.communicate()
+        pub.send_signal(signal.SIGINT)
+        pub.communicate()
+        with BagReader([out]) as reader:
+            values = [int.from_bytes(bytes(raw)[4:8], "little") for _c, _t, raw in reader.messages()]
+    label = f"{rate:g} msg/s" if rate else "max"
+    in_order = values == sorted(values)
+    missed = 100 * (count - len(values)) / count
+    print(f"record {label:>9}: {sent}; the bag holds {len(values)} ({missed:.2f}% missed, "
+          f"in order: {in_order}), recorder cpu {cpu:.2f}s {err.strip()}")  # fmt: skip
+
+
 def main() -> None:
-    wanted = sys.argv[1:] or ["startup", "hz", "echo"]
+    wanted = sys.argv[1:] or ["startup", "hz", "echo", "record"]
     if "startup" in wanted:
         bench_startup()
     if "hz" in wanted:
@@ -151,6 +181,10 @@ def main() -> None:
         bench_echo(10_000, 1_000)
         bench_echo(50_000, 10_000)
         bench_echo(20_000, 0)
+    if "record" in wanted:
+        bench_record(10_000, 1_000)
+        bench_record(100_000, 10_000)
+        bench_record(50_000, 0)
 
 
 if __name__ == "__main__":
