@@ -8,7 +8,7 @@ from typing import Any
 
 import click
 
-from rostool.commands._common import json_option, live_graph, print_json
+from rostool.commands._common import json_option, live_graph, print_json, ros_version
 from rostool.errors import RostoolError
 
 
@@ -23,6 +23,7 @@ def param() -> None:
       rostool param dump params.yaml
       rostool param load params.yaml
       rostool --ros2 param get /talker use_sim_time     # ROS 2: NODE then PARAM
+      rostool --ros2 param dump /talker > talker.yaml
     """
 
 
@@ -224,32 +225,87 @@ def _set_checked(graph: Any, name: str, value: Any) -> None:
 
 @param.command("delete")
 @click.argument("name")
+@click.argument("param_name", required=False, metavar="[PARAM]")
 @click.pass_context
-def delete(ctx: click.Context, name: str) -> None:
-    """Delete a parameter (or a whole namespace).
+def delete(ctx: click.Context, name: str, param_name: str | None) -> None:
+    """Delete a parameter (or a whole namespace). ROS 2: NODE then PARAM.
 
     \b
-    Example:
+    Examples:
       rostool param delete /wheel_radius
+      rostool --ros2 param delete /talker my_param
     """
     with live_graph(ctx) as graph:
+        _ros2_only_args(graph, param_name, "rostool param delete NODE PARAM")
+        if param_name is not None:
+            _delete_ros2(graph, name, param_name)
+            return
         graph.delete_param(name)
 
 
+def _delete_ros2(graph: Any, node: str, name: str) -> None:
+    from rostool.graph.ros2.params import ParameterClient
+
+    ok, reason = ParameterClient(graph, node).delete(name)
+    if not ok:
+        raise RostoolError(
+            f"deleting parameter {name} on {graph.resolve(node)} failed: {reason or 'refused'}"
+        )
+    click.echo("Deleted parameter successfully" + (f": {reason}" if reason else ""))
+
+
+def _is_ros2(ctx: click.Context) -> bool:
+    """The version decides what dump's and load's arguments mean, so it is chosen before reading files."""
+    from rostool.graph import select_ros_version
+
+    return select_ros_version(ros_version(ctx)) == 2
+
+
 @param.command("dump")
-@click.argument("file", type=click.Path(dir_okay=False, writable=True))
-@click.argument("namespace", default="/")
+@click.argument("file", metavar="FILE|NODE")
+@click.argument("namespace", required=False, metavar="[NAMESPACE|FILE]")
+@json_option
 @click.pass_context
-def dump(ctx: click.Context, file: str, namespace: str) -> None:
+def dump(ctx: click.Context, file: str, namespace: str | None, as_json: bool) -> None:
     """Write parameters (all, or under NAMESPACE) to a YAML FILE ("-" for stdout).
 
+    ROS 2: every parameter of NODE, printed (or written to FILE) in the parameter file layout that
+    `param load` and a node's --params-file read.
+
     \b
-    Example:
+    Examples:
       rostool param dump params.yaml
+      rostool param dump robot.yaml /robot
+      rostool --ros2 param dump /talker > talker.yaml
     """
+    if _is_ros2(ctx):
+        _dump_ros2(ctx, node=file, target=namespace or "-", as_json=as_json)
+        return
     with live_graph(ctx) as graph:
-        value = graph.get_param(namespace)
-    text = _yaml_text(value).rstrip("\n") + "\n"
+        value = graph.get_param(namespace or "/")
+    _write(file, _json_text(value) if as_json else _yaml_text(value).rstrip("\n") + "\n")
+
+
+def _dump_ros2(ctx: click.Context, node: str, target: str, as_json: bool) -> None:
+    from rostool.graph.ros2.params import ParameterClient, dump_document
+
+    with live_graph(ctx) as graph:
+        document = dump_document(ParameterClient(graph, node))
+    if as_json:
+        _write(target, _json_text(document))
+    elif target == "-":
+        click.echo(_yaml_text(document))  # ros2 param dump prints the YAML and then a blank line
+    else:
+        _write(target, _yaml_text(document))
+
+
+def _json_text(value: Any) -> str:
+    from rostool.output.json_text import dumps
+
+    return dumps(value) + "\n"
+
+
+def _write(file: str, text: str) -> None:
     if file == "-":
         click.echo(text, nl=False)
         return
@@ -264,20 +320,44 @@ def dump(ctx: click.Context, file: str, namespace: str) -> None:
 
 
 @param.command("load")
-@click.argument("file", type=click.Path(dir_okay=False))
-@click.argument("namespace", default="/")
+@click.argument("file", metavar="FILE|NODE")
+@click.argument("namespace", required=False, metavar="[NAMESPACE|FILE]")
+@click.option(
+    "--no-use-wildcard", is_flag=True, help="ROS 2: skip the file's '/**' section, load only the node's own."
+)
 @click.pass_context
-def load(ctx: click.Context, file: str, namespace: str) -> None:
+def load(ctx: click.Context, file: str, namespace: str | None, no_use_wildcard: bool) -> None:
     """Set parameters from a YAML FILE ("-" for stdin), under NAMESPACE.
 
+    ROS 2: NODE then FILE, a parameter file as `param dump` writes it; the node's own section and the
+    '/**' section for every node are loaded, the node's own winning.
+
     \b
-    Example:
+    Examples:
       rostool param load params.yaml /robot
+      rostool --ros2 param load /talker talker.yaml
+      rostool --ros2 param load /talker common.yaml --no-use-wildcard
     """
+    if _is_ros2(ctx):
+        if namespace is None:
+            raise RostoolError("ROS 2 parameters belong to a node: rostool param load NODE FILE")
+        if _load_ros2(ctx, node=file, file=namespace, use_wildcard=not no_use_wildcard):
+            ctx.exit(1)
+        return
+    if no_use_wildcard:
+        raise RostoolError("--no-use-wildcard applies to ROS 2 parameter files (rostool --ros2 param load)")
+    _load_ros1(ctx, file, namespace or "/")
+
+
+def _read_document(file: str) -> Any:
     from rostool.interfaces.values import parse_yaml
 
     text = sys.stdin.read() if file == "-" else _read_text(file)
-    value = parse_yaml(text, file)
+    return parse_yaml(text, file)
+
+
+def _load_ros1(ctx: click.Context, file: str, namespace: str) -> None:
+    value = _read_document(file)
     with live_graph(ctx) as graph:
         prefix = graph.resolve(namespace)
         if isinstance(value, dict):
@@ -288,6 +368,21 @@ def load(ctx: click.Context, file: str, namespace: str) -> None:
             if prefix == "/":
                 raise RostoolError(f"{file} holds a single value; give a NAMESPACE to store it under")
             _set_checked(graph, prefix, value)
+
+
+def _load_ros2(ctx: click.Context, node: str, file: str, use_wildcard: bool) -> int:
+    """ros2 param load: one result line per parameter, failures on stderr; returns how many failed."""
+    from rostool.graph.ros2.params import ParameterClient, file_parameters, load_fields
+
+    document = _read_document(file)
+    with live_graph(ctx) as graph:
+        client = ParameterClient(graph, node)
+        parameters = file_parameters(document, client.node, use_wildcard, file)
+        results = client.set_fields(load_fields(client, parameters, file))
+    for name, ok, reason in results:
+        line = f"Set parameter {name} {'successful' if ok else 'failed'}" + (f": {reason}" if reason else "")
+        click.echo(line, err=not ok)
+    return sum(not ok for _, ok, _ in results)
 
 
 def _join(namespace: str, key: str) -> str:

@@ -1,5 +1,8 @@
 """ROS 2 parameters: each node serves them on `<node>/list_parameters`, `get_parameters`, `set_parameters`
-and `describe_parameters` (rcl_interfaces services); values travel as rcl_interfaces/msg/ParameterValue."""
+and `describe_parameters` (rcl_interfaces services); values travel as rcl_interfaces/msg/ParameterValue.
+
+Deleting is a set_parameters call with a NOT_SET value (as ros2param does); dump and load use the parameter
+file layout of `ros2 param dump` and rcl: `/node: ros__parameters: {name: value}`, dotted names nested."""
 
 from __future__ import annotations
 
@@ -58,7 +61,13 @@ def type_of(value: Any) -> int:
 
 def value_fields(value: Any) -> dict[str, Any]:
     """The fields of the ParameterValue holding `value`."""
-    kind = type_of(value)
+    return typed_fields(type_of(value), value)
+
+
+def typed_fields(kind: int, value: Any) -> dict[str, Any]:
+    """The fields of a ParameterValue of a known type (an empty array, or NOT_SET, included)."""
+    if kind == NOT_SET:
+        return {"type": NOT_SET}
     item = [float(v) for v in value] if kind == DOUBLE_ARRAY else value
     return {"type": kind, _FIELDS[kind]: item}
 
@@ -110,19 +119,149 @@ class ParameterClient:
         return sorted(response.result.names)
 
     def get(self, name: str) -> Any:
-        response = self._call("get_parameters", {"names": [name]})
-        if not response.values:
-            raise RostoolError(f"node {self.node} returned no value for {name}")
-        return response.values[0]
+        return self.values([name])[0]
+
+    def values(self, names: list[str]) -> list[Any]:
+        """The ParameterValue of each name, in order (NOT_SET for the ones the node does not have)."""
+        response = self._call("get_parameters", {"names": names})
+        if len(response.values) != len(names):
+            raise RostoolError(
+                f"node {self.node} returned {len(response.values)} values for {len(names)} names"
+            )
+        return list(response.values)
 
     def set(self, name: str, value: Any) -> tuple[bool, str]:
-        parameter = {"name": name, "value": value_fields(value)}
-        response = self._call("set_parameters", {"parameters": [parameter]})
-        result = response.results[0]
-        return bool(result.successful), str(result.reason)
+        _, ok, reason = self.set_fields({name: value_fields(value)})[0]
+        return ok, reason
+
+    def delete(self, name: str) -> tuple[bool, str]:
+        _, ok, reason = self.set_fields({name: typed_fields(NOT_SET, None)})[0]
+        return ok, reason
+
+    def set_fields(self, fields: dict[str, dict[str, Any]]) -> list[tuple[str, bool, str]]:
+        """One set_parameters call; the node judges each parameter on its own: (name, successful, reason)."""
+        parameters = [{"name": name, "value": value} for name, value in fields.items()]
+        response = self._call("set_parameters", {"parameters": parameters})
+        if len(response.results) != len(fields):
+            raise RostoolError(
+                f"node {self.node} returned {len(response.results)} results for {len(fields)} parameters"
+            )
+        return [
+            (name, bool(r.successful), str(r.reason))
+            for name, r in zip(fields, response.results, strict=True)
+        ]
 
     def describe(self, name: str) -> Any:
         response = self._call("describe_parameters", {"names": [name]})
         if not response.descriptors:
             raise RostoolError(f"node {self.node} returned no description for {name}")
         return response.descriptors[0]
+
+
+# --- parameter files ---------------------------------------------------------------------------------
+
+SEPARATOR = "."
+WILDCARD = "/**"
+SECTION = "ros__parameters"
+
+
+def dump_document(client: ParameterClient) -> dict[str, Any]:
+    """Every parameter of the node as `ros2 param dump` lays it out."""
+    names = client.names()
+    values = client.values(names) if names else []
+    flat = {name: to_python(value) for name, value in zip(names, values, strict=True)}
+    return {client.node: {SECTION: nest(flat)}}
+
+
+def nest(flat: dict[str, Any]) -> dict[str, Any]:
+    """`a.b: 1` becomes `a: {b: 1}`; a name whose prefix is itself a value stays dotted (it loads back the
+    same)."""
+    tree: dict[str, Any] = {}
+    for name in sorted(flat):
+        _insert(tree, name, flat[name])
+    return tree
+
+
+def _insert(tree: dict[str, Any], name: str, value: Any) -> None:
+    head, separator, rest = name.partition(SEPARATOR)
+    if separator and head and rest and isinstance(tree.setdefault(head, {}), dict):
+        _insert(tree[head], rest, value)
+    else:
+        tree[name] = value
+
+
+def flatten(tree: dict[Any, Any], prefix: str = "") -> dict[str, Any]:
+    flat: dict[str, Any] = {}
+    for key, value in tree.items():
+        name = f"{prefix}{key}"
+        if isinstance(value, dict):
+            flat.update(flatten(value, name + SEPARATOR))
+        else:
+            flat[name] = value
+    return flat
+
+
+def file_parameters(document: Any, node: str, use_wildcard: bool, source: str) -> dict[str, Any]:
+    """The parameters a file gives `node`: the `/**` section first (when used), then the node's own."""
+    if not isinstance(document, dict):
+        raise RostoolError(
+            f"{source} is not a ROS 2 parameter file: expected `/node: {SECTION}: ...` mappings"
+        )
+    sections = [(WILDCARD, document[WILDCARD])] if use_wildcard and WILDCARD in document else []
+    sections += _node_sections(document, node)
+    parameters: dict[str, Any] = {}
+    for key, section in sections:
+        parameters.update(flatten(_parameters_of(section, key, source)))
+    if not parameters:
+        skipped = f" or {WILDCARD}" if use_wildcard else f" ({WILDCARD} is skipped with --no-use-wildcard)"
+        keys = ", ".join(str(k) for k in document) or "none"
+        raise RostoolError(
+            f"{source} does not contain any valid parameters for {node}{skipped}; its keys: {keys}"
+        )
+    return parameters
+
+
+def _node_sections(document: dict[Any, Any], node: str) -> list[tuple[str, Any]]:
+    """rcl's ways to name a node: `/ns/node`, `ns/node`, or namespaces nested as keys (`/ns: node: ...`)."""
+    parts = node.strip("/").split("/")
+    found = []
+    for cut in range(1, len(parts) + 1):
+        for key in ("/" + "/".join(parts[:cut]), "/".join(parts[:cut])):
+            section = document.get(key)
+            for part in parts[cut:]:
+                section = section.get(part) if isinstance(section, dict) else None
+            if section is not None:
+                found.append((key + "".join(f"/{p}" for p in parts[cut:]), section))
+    return found
+
+
+def _parameters_of(section: Any, key: str, source: str) -> dict[Any, Any]:
+    if not isinstance(section, dict) or SECTION not in section:
+        raise RostoolError(
+            f"{source} is not a valid ROS parameter file for node {key}: expected `{key}: {SECTION}: "
+            "NAME: VALUE`, as `rostool --ros2 param dump` writes"
+        )
+    parameters = section[SECTION] or {}
+    if not isinstance(parameters, dict):
+        raise RostoolError(f"{source}: {key}: {SECTION} must be a mapping of names to values")
+    return parameters
+
+
+def load_fields(
+    client: ParameterClient, parameters: dict[str, Any], source: str
+) -> dict[str, dict[str, Any]]:
+    """ParameterValue fields for each file value. An empty list carries no type of its own, so it takes
+    the array type the node has now (else boolean array, as rclpy picks)."""
+    empty = [name for name, value in parameters.items() if value == []]
+    current = dict(zip(empty, client.values(empty), strict=True)) if empty else {}
+    fields: dict[str, dict[str, Any]] = {}
+    for name, value in parameters.items():
+        if name in current:
+            kind = int(current[name].type)
+            fields[name] = typed_fields(kind if kind >= BYTE_ARRAY else BOOL_ARRAY, [])
+            continue
+        try:
+            fields[name] = value_fields(value)
+        except RostoolError as err:
+            raise RostoolError(f"{source}: parameter {name}: {err}") from err
+    return fields
