@@ -17,11 +17,15 @@ from click.testing import CliRunner
 from rostool.cli import root
 from rostool.reference import CheatsheetDataError, Reference, load_reference, search
 from rostool.reference.model import build_reference, data_path, live_command_groups
+from rostool.reference.search import Column
 from rostool.reference.verbs import missing_rostool_verbs, unknown_rostool_flags, unplanned_rostool_verbs
 from tests.support import rostool
 
 SECTIONS = ["nodes", "topics", "params", "bags", "services", "actions", "interfaces", "build", "python"]
-JSON_KEYS = {"section", "ros1", "ros2", "rostool", "description", "inputs", "output", "aliases"}
+JSON_KEYS = {
+    *("section", "ros1", "ros2", "rostool", "rostool_ros2"),
+    *("description", "inputs", "output", "aliases"),
+}
 RECORD = (
     "rosbag record -o <prefix>",
     "rosbag record -a",
@@ -345,11 +349,14 @@ def test_json_schema(reference: Reference) -> None:
             assert isinstance(item[key], str) and item[key]
         assert item["ros2"] is None or isinstance(item["ros2"], str)
         assert item["rostool"] is None or item["rostool"].startswith("rostool ")
+        assert item["rostool_ros2"] is None or item["rostool_ros2"].startswith("rostool --ros2 ")
         assert isinstance(item["aliases"], list) and all(isinstance(alias, str) for alias in item["aliases"])
         assert item["section"] in SECTIONS
     by_ros1 = {item["ros1"]: item for item in items}
     assert "roscpp list" in by_ros1["rosnode list"]["aliases"]
     assert "rosvbag info" in by_ros1["rosbag info <file.bag>"]["aliases"]
+    assert by_ros1["rosparam get <name>"]["rostool_ros2"] == "rostool --ros2 param get <node> <name>"
+    assert by_ros1["rosnode list"]["rostool_ros2"] is None
 
 
 def test_section_filter() -> None:
@@ -548,3 +555,159 @@ def test_unbuilt_groups_are_hidden_and_built_ones_checked_strictly() -> None:
     problems = missing_rostool_verbs(only_topic, root=fake_root)
     assert "rostopic hz <topic>: 'rostool topic' has no subcommand 'hz'" in problems
     assert not any(problem.startswith("rostopic list:") for problem in problems)
+
+
+# --- rostool's ROS 2 forms ------------------------------------------------------------------------
+
+ROS2_FORMS = {
+    "rosparam list": "rostool --ros2 param list <node>",
+    "rosparam get <name>": "rostool --ros2 param get <node> <name>",
+    "rosparam set <name> <value>": "rostool --ros2 param set <node> <name> <value>",
+    "rosparam delete <name>": "rostool --ros2 param delete <node> <name>",
+    "rosparam dump <file.yaml>": "rostool --ros2 param dump <node>",
+    "rosparam load <file.yaml>": "rostool --ros2 param load <node> <file.yaml>",
+    "rosservice call <service> <args>": "rostool --ros2 service call <service> <type> <request>",
+    "rosservice info <service>": "rostool --ros2 service info <service>",
+    "rostopic info <action>/goal": "rostool --ros2 action info <action>",
+    "rostopic pub <action>/goal <type>ActionGoal <goal>": (
+        "rostool --ros2 action send-goal --feedback <action> <type> <goal>"
+    ),
+    "rosbag record -O <file.bag>": "rostool --ros2 bag record -a -O <name>.mcap",
+    "rosbag play --clock <file.bag>": "rostool --ros2 bag play --clock <bag>",
+    "rostopic echo <topic>": "rostool --ros2 topic echo <topic> --qos-reliability best_effort",
+}
+
+
+def test_ros2_forms_are_filled_where_rostool_differs_on_ros2(reference: Reference) -> None:
+    for ros1, form in ROS2_FORMS.items():
+        entry = reference.entry(ros1)
+        assert entry is not None and entry.rostool_ros2 == form, ros1
+    for entry in reference.iter_entries():
+        if entry.rostool_ros2 is not None:
+            assert entry.ros2 is not None, entry.ros1
+            assert entry.rostool_ros2 != entry.rostool
+
+
+def test_text_shows_the_ros2_form_under_the_rostool_form() -> None:
+    lines = invoke("rosparam get", "--format", "text").stdout.splitlines()
+    at = lines.index("    rostool: rostool param get <name>")
+    assert lines[at + 1] == "             rostool --ros2 param get <node> <name>"
+
+    plain_only = invoke("rosnode list", "--format", "text").stdout.splitlines()
+    assert "    rostool: rostool node list" in plain_only
+    assert not any("--ros2" in line for line in plain_only)
+
+
+def test_ros2_lookup_puts_the_ros2_form_first() -> None:
+    done = run("--ros2", "ros2 param get")
+    assert done.returncode == 0, done.stderr
+    lines = done.stdout.splitlines()
+    assert lines[0].startswith("ros2 param get <node> <name>")
+    rostool_line = lines.index("    rostool: rostool --ros2 param get <node> <name>")
+    assert lines[rostool_line + 1] == "             rostool param get <name>"
+    assert rostool_line < lines.index("    ROS 1:   rosparam get <name>")
+
+    as_json = run("--ros2", "ros2 service call", "--format", "json")
+    first = json.loads(as_json.stdout)[0]
+    assert first["ros1"] == "rosservice call <service> <args>"
+    assert first["rostool_ros2"] == "rostool --ros2 service call <service> <type> <request>"
+
+    table = invoke("--ros2", "ros2 param get", "--format", "table")
+    assert table.exit_code == 0, table.output
+    ros2_form = table.stdout.index("rostool --ros2 param get <node> <name>")
+    assert ros2_form < table.stdout.index("rostool param get <name>")
+
+
+def test_markdown_shows_both_rostool_forms_in_one_cell() -> None:
+    lines = invoke("--section", "params", "--format", "markdown").stdout.splitlines()
+    assert lines[2] == "| ROS 1 | ROS 2 | rostool | Description | Inputs | Output | Aliases |"
+    assert any(
+        line.startswith(
+            "| `rosparam get <name>` | `ros2 param get <node> <name>` | "
+            "`rostool param get <name>`<br>`rostool --ros2 param get <node> <name>` |"
+        )
+        for line in lines
+    )
+
+
+def test_ros2_forms_are_searchable(reference: Reference) -> None:
+    columns: tuple[Column, ...] = ("ros1", "ros2")
+    for column in columns:
+        hits = search(reference, "rostool --ros2 param set <node> <name> <value>", column=column).hits
+        assert hits[0].entry.ros1 == "rosparam set <name> <value>", column
+    assert search(reference, "rostool --ros2 service info", column="ros1").hits[0].entry.ros1 == (
+        "rosservice info <service>"
+    )
+
+
+def _with_ros2_form(raw_data: dict[str, Any], ros1: str, form: str) -> dict[str, Any]:
+    data = _broken(raw_data)
+    for section in data["sections"]:
+        for entry in section["entries"]:
+            if entry["ros1"] == ros1:
+                entry["rostool_ros2"] = form
+    return data
+
+
+def test_yaml_ros2_form_must_start_with_rostool_ros2(raw_data: dict[str, Any]) -> None:
+    for form in ("rostool param get <node> <name>", "ros2 param get <node> <name>", "rostool --ros2"):
+        data = _with_ros2_form(raw_data, "rosparam get <name>", form)
+        with pytest.raises(CheatsheetDataError, match="must start with 'rostool --ros2 <verb>'"):
+            build_reference(data, available_groups=())
+
+
+def test_ros2_form_with_a_missing_flag_or_verb_is_rejected(raw_data: dict[str, Any]) -> None:
+    groups = live_command_groups()
+    bad_flag = "rostool --ros2 topic echo <topic> --qos-reliablity best_effort"
+    data = _with_ros2_form(raw_data, "rostopic echo <topic>", bad_flag)
+    assert unknown_rostool_flags(build_reference(data, groups)) == [
+        f"rostopic echo <topic>: '{bad_flag}' uses --qos-reliablity, which echo lacks"
+    ]
+
+    data = _with_ros2_form(raw_data, "rosparam get <name>", "rostool --ros2 param fetch <node> <name>")
+    assert missing_rostool_verbs(build_reference(data, groups)) == [
+        "rosparam get <name>: 'rostool --ros2 param' has no subcommand 'fetch'"
+    ]
+    assert unplanned_rostool_verbs(build_reference(data, available_groups=())) == [
+        "rosparam get <name>: no planned verb 'rostool param fetch'"
+    ]
+
+    data = _with_ros2_form(raw_data, "rosnode list", "rostool --ros2 node --all list")
+    assert missing_rostool_verbs(build_reference(data, groups)) == [
+        "rosnode list: 'rostool --ros2 node' has no option --all"
+    ]
+
+
+def test_the_root_ros2_option_is_checked_against_the_tree(reference: Reference) -> None:
+    @click.group()
+    def without_ros2() -> None: ...
+
+    @click.group()
+    @click.option("--ros2", is_flag=True)
+    def with_ros2(ros2: bool) -> None: ...
+
+    for fake in (without_ros2, with_ros2):
+
+        @fake.group("param")
+        def fake_param() -> None: ...
+
+        @fake_param.command("get")
+        @click.argument("names", nargs=-1)
+        def fake_get(names: tuple[str, ...]) -> None: ...
+
+    only_param = Reference(tuple(s for s in reference.sections if s.id == "params"))
+    missing = missing_rostool_verbs(only_param, root=without_ros2)
+    assert "rosparam get <name>: 'rostool' has no option --ros2" in missing
+    missing = missing_rostool_verbs(only_param, root=with_ros2)
+    assert not any(problem.startswith("rosparam get <name>:") for problem in missing)
+    assert "rosparam set <name> <value>: 'rostool --ros2 param' has no subcommand 'set'" in missing
+
+
+def test_unbuilt_groups_hide_the_ros2_form_too() -> None:
+    only_topic = load_reference(available_groups={"topic"})
+    param_get = only_topic.entry("rosparam get <name>")
+    topic_echo = only_topic.entry("rostopic echo <topic>")
+    assert param_get is not None and param_get.rostool_ros2 is None
+    assert param_get.planned_rostool_ros2 == "rostool --ros2 param get <node> <name>"
+    assert topic_echo is not None
+    assert topic_echo.rostool_ros2 == "rostool --ros2 topic echo <topic> --qos-reliability best_effort"

@@ -23,6 +23,7 @@ Examples:
   rostool cheatsheet rospy.Rate --format json
   rostool cheatsheet --section bags --format markdown
   rostool cheatsheet --ros2 "ros2 topic hz"   which ROS 1 / rostool command is this?
+  rostool cheatsheet --ros2 ros2 param get    rostool's ROS 2 form first (rostool --ros2 ...)
 """,
 )
 @click.argument("query", nargs=-1, type=click.UNPROCESSED)
@@ -33,7 +34,12 @@ Examples:
     type=click.Choice(FORMATS),
     help="Output format. Default: a table on a terminal, plain text when piped.",
 )
-@click.option("--ros2", "ros2_column", is_flag=True, help="Treat QUERY as a ROS 2 command or rclpy call.")
+@click.option(
+    "--ros2",
+    "ros2_column",
+    is_flag=True,
+    help="Treat QUERY as a ROS 2 command or rclpy call; show rostool's ROS 2 form first.",
+)
 @click.option(
     "--limit", type=click.IntRange(min=0), default=10, show_default=True, help="Most hits shown (0: all)."
 )

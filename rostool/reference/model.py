@@ -14,11 +14,14 @@ import yaml
 
 from rostool.errors import RostoolError
 
-ENTRY_KEYS = frozenset({"ros1", "description", "inputs", "output", "ros2", "rostool", "aliases", "keywords"})
+ENTRY_KEYS = frozenset(
+    {"ros1", "description", "inputs", "output", "ros2", "rostool", "rostool_ros2", "aliases", "keywords"}
+)
 REQUIRED_ENTRY_KEYS = frozenset({"ros1", "description", "inputs", "output", "ros2", "rostool"})
 MISSPELLING_KEYS = frozenset({"wrong", "right", "entry", "what", "kind", "problem", "why", "match"})
 REQUIRED_MISSPELLING_KEYS = frozenset({"wrong", "right", "entry", "what", "kind"})
 MISSPELLING_KINDS = frozenset({"command", "name"})
+ROS2_PREFIX = ("rostool", "--ros2")
 
 
 class CheatsheetDataError(RostoolError):
@@ -37,6 +40,10 @@ class Entry:
     rostool: str | None
     # The rostool form as written in the data file, before hiding unbuilt groups.
     planned_rostool: str | None
+    # The rostool form for a ROS 2 graph (`rostool --ros2 ...`, ros2cli's argument order), shown and
+    # as written, the same way.
+    rostool_ros2: str | None = None
+    planned_rostool_ros2: str | None = None
     aliases: tuple[str, ...] = ()
     misspellings: tuple[str, ...] = ()
     keywords: tuple[str, ...] = ()
@@ -46,12 +53,22 @@ class Entry:
         """The book's wrong forms first, then the other common spellings."""
         return self.misspellings + self.aliases
 
+    @property
+    def rostool_forms(self) -> tuple[str, ...]:
+        """The shown rostool forms: the plain one, then the ROS 2 one."""
+        return tuple(form for form in (self.rostool, self.rostool_ros2) if form is not None)
+
+    @property
+    def planned_rostool_forms(self) -> tuple[str, ...]:
+        return tuple(form for form in (self.planned_rostool, self.planned_rostool_ros2) if form is not None)
+
     def to_json(self) -> dict[str, Any]:
         return {
             "section": self.section,
             "ros1": self.ros1,
             "ros2": self.ros2,
             "rostool": self.rostool,
+            "rostool_ros2": self.rostool_ros2,
             "description": self.description,
             "inputs": self.inputs,
             "output": self.output,
@@ -226,11 +243,8 @@ def _parse_entry(
     if unknown:
         problems.append(f"{where}: unknown keys {', '.join(sorted(map(str, unknown)))}")
     ros1 = _string(raw, "ros1", where, problems)
-    planned = _optional_string(raw, "rostool", where, problems)
-    if planned is not None and (len(planned.split()) < 2 or planned.split()[0] != "rostool"):
-        problems.append(f"{where}: rostool form '{planned}' must start with 'rostool <verb>'")
-        planned = None
-    shown = planned if planned is not None and planned.split()[1] in available_groups else None
+    planned = _rostool_form(raw, "rostool", ("rostool",), where, problems)
+    planned_ros2 = _rostool_form(raw, "rostool_ros2", ROS2_PREFIX, where, problems)
     return Entry(
         section=section_id,
         ros1=ros1,
@@ -238,12 +252,37 @@ def _parse_entry(
         inputs=_string(raw, "inputs", where, problems),
         output=_string(raw, "output", where, problems),
         ros2=_optional_string(raw, "ros2", where, problems),
-        rostool=shown,
+        rostool=_shown(planned, available_groups),
         planned_rostool=planned,
+        rostool_ros2=_shown(planned_ros2, available_groups),
+        planned_rostool_ros2=planned_ros2,
         aliases=_string_list(raw, "aliases", where, problems),
         misspellings=tuple(misspellings_by_entry.get(ros1, ())),
         keywords=_string_list(raw, "keywords", where, problems),
     )
+
+
+def _rostool_form(
+    raw: Mapping[str, Any], key: str, prefix: tuple[str, ...], where: str, problems: list[str]
+) -> str | None:
+    """The form under `key`, or None (with a problem) unless it is `<prefix> <verb> ...`."""
+    form = _optional_string(raw, key, where, problems)
+    if form is None:
+        return None
+    words = form.split()
+    if len(words) <= len(prefix) or tuple(words[: len(prefix)]) != prefix or words[len(prefix)][0] == "-":
+        problems.append(f"{where}: {key} form '{form}' must start with '{' '.join(prefix)} <verb>'")
+        return None
+    return form
+
+
+def form_group(form: str) -> str:
+    """The top-level verb a rostool form runs: its first word after `rostool` and root options."""
+    return next(word for word in form.split()[1:] if not word.startswith("-"))
+
+
+def _shown(planned: str | None, available_groups: Collection[str]) -> str | None:
+    return planned if planned is not None and form_group(planned) in available_groups else None
 
 
 def _parse_misspellings(raw: object, problems: list[str]) -> list[Misspelling]:

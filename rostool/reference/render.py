@@ -6,9 +6,12 @@ import json
 import textwrap
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 from rostool.reference.model import Entry
+
+if TYPE_CHECKING:
+    from rich.text import Text
 
 Primary = Literal["ros1", "ros2"]
 WIDTH = 100
@@ -45,23 +48,32 @@ def _text_entry(entry: Entry, section_title: str | None, primary: Primary) -> li
     heading = (entry.ros2 or "") if primary == "ros2" else entry.ros1
     lines = [f"{heading}  ({section_title})" if section_title else heading]
     lines += textwrap.wrap(entry.description, WIDTH, initial_indent="    ", subsequent_indent="    ")
+    # Further rostool forms go on their own lines under the first, without a label of their own.
+    forms = rostool_forms(entry, primary) or ("(none)",)
+    rostool = [("rostool" if index == 0 else "", form) for index, form in enumerate(forms)]
     fields = [("inputs", entry.inputs), ("output", entry.output)]
     if primary == "ros2":
-        fields.append(("ROS 1", entry.ros1))
+        # A ROS 2 user looks for the form to type first; the ROS 1 command is background.
+        fields += [*rostool, ("ROS 1", entry.ros1)]
     else:
-        fields.append(("ROS 2", entry.ros2 or "(none)"))
-    fields.append(("rostool", entry.rostool or "(none)"))
+        fields += [("ROS 2", entry.ros2 or "(none)"), *rostool]
     if entry.all_aliases:
         fields.append(("aliases", ", ".join(entry.all_aliases)))
     for label, value in fields:
         lines += textwrap.wrap(
             value,
             WIDTH,
-            initial_indent=f"    {label + ':':<9}",
+            initial_indent=f"    {label + ':' if label else '':<9}",
             subsequent_indent=" " * 13,
             break_on_hyphens=False,
         )
     return lines
+
+
+def rostool_forms(entry: Entry, primary: Primary) -> tuple[str, ...]:
+    """The entry's rostool forms, the one for the graph the reader asked about first."""
+    forms = entry.rostool_forms
+    return forms[::-1] if primary == "ros2" else forms
 
 
 def render_markdown(blocks: Sequence[Block], notes: Sequence[str], titles: Mapping[str, str]) -> str:
@@ -81,7 +93,7 @@ def render_markdown(blocks: Sequence[Block], notes: Sequence[str], titles: Mappi
             cells = [
                 _code(entry.ros1),
                 _code(entry.ros2),
-                _code(entry.rostool),
+                "<br>".join(_code(form) for form in entry.rostool_forms),
                 _escape(entry.description),
                 _escape(entry.inputs),
                 _escape(entry.output),
@@ -121,7 +133,7 @@ def print_table(
         table.add_column(first, style="bold cyan", overflow="fold", ratio=3)
         table.add_column("What it does", overflow="fold", ratio=4)
         table.add_column(second, overflow="fold", ratio=3)
-        table.add_column("rostool", style="green", overflow="fold", ratio=2)
+        table.add_column("rostool", style="green", overflow="fold", ratio=3)
         for entry in block.entries:
             main, other = (entry.ros2, entry.ros1) if primary == "ros2" else (entry.ros1, entry.ros2)
             head = Text(main or "(none)")
@@ -131,5 +143,17 @@ def print_table(
                 head.append(f"\n[{titles.get(entry.section, entry.section)}]", style="dim italic")
             body = Text(entry.description)
             body.append(f"\nin: {entry.inputs}\nout: {entry.output}", style="dim")
-            table.add_row(head, body, Text(other or "(none)"), Text(entry.rostool or "(none)"))
+            table.add_row(head, body, Text(other or "(none)"), _rostool_cell(entry, primary))
         console.print(table)
+
+
+def _rostool_cell(entry: Entry, primary: Primary) -> Text:
+    from rich.text import Text
+
+    forms = rostool_forms(entry, primary)
+    if not forms:
+        return Text("(none)")
+    cell = Text(forms[0], style="bold")
+    for form in forms[1:]:
+        cell.append("\n" + form, style="dim")
+    return cell

@@ -142,12 +142,12 @@ def _rewrite_command(misspelling: Misspelling, query: str) -> tuple[str, str, st
 
 def _forms(entry: Entry, column: Column) -> list[tuple[str, float, bool]]:
     """(text, score offset, counts for identifier matching) of the forms a query is compared with."""
+    rostool = [(form, -60.0, False) for form in entry.rostool_forms]
     if column == "ros2":
-        return [(entry.ros2, 0.0, True)] if entry.ros2 else []
+        return ([(entry.ros2, 0.0, True)] if entry.ros2 else []) + rostool
     forms = [(entry.ros1, 0.0, True)]
     forms += [(alias, -5.0, True) for alias in entry.aliases]
-    if entry.rostool:
-        forms.append((entry.rostool, -60.0, False))
+    forms += rostool
     if entry.ros2:
         forms.append((entry.ros2, -80.0, False))
     return forms
@@ -363,7 +363,7 @@ def _query_words(query: str) -> list[str]:
 
 @lru_cache(maxsize=512)
 def _entry_words(entry: Entry) -> tuple[tuple[frozenset[str], float], ...]:
-    forms = " ".join(filter(None, (entry.ros1, *entry.aliases, entry.ros2, entry.rostool)))
+    forms = " ".join(filter(None, (entry.ros1, *entry.aliases, entry.ros2, *entry.rostool_forms)))
     return (
         (_words(entry.keywords), 60.0),
         (_words([forms]), 30.0),
