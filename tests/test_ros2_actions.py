@@ -205,3 +205,33 @@ def test_ctrl_c_cancels_the_goal_on_the_server() -> None:
     assert f"CANCEL REQUEST {sent['goal_id']} 0" in lines
     assert f"CANCELED {sent['goal_id']} {partial}" in lines  # the server stopped where the client saw it
     assert f"CANCEL REQUEST {late_id} 0" in lines
+
+
+def test_cancel_by_goal_id() -> None:
+    server, env = start_server(0.2)
+    try:
+        client = rostool_popen(["action", "send-goal", "/fibonacci", "{order: 40}", "--json"], env)
+        assert client.stdout is not None
+        sent = json.loads(client.stdout.readline())
+        assert sent["event"] == "sent" and sent["accepted"] is True, client.stderr
+        goal_id = sent["goal_id"]
+
+        canceled = rostool(["action", "cancel", "/fibonacci", goal_id], env)
+        assert canceled.stdout == f"Canceling 1 goal(s) of /fibonacci:\n    {goal_id}\n", canceled.stderr
+        out, err = client.communicate(timeout=15)
+        assert client.returncode == 1, err
+        result = json.loads(out.splitlines()[-1])
+        assert result["status"] == "CANCELED" and result["result"]["sequence"][:2] == [0, 1]
+
+        stranger = "0123456789abcdef0123456789abcdef"
+        unknown = rostool(["action", "cancel", "/fibonacci", stranger], env)
+        assert unknown.returncode == 1
+        assert unknown.stderr == (
+            f"rostool: canceling goal {stranger} of /fibonacci failed: the server does not know the goal\n"
+        )
+    finally:
+        server_out, server_err = server.communicate(input="", timeout=20)
+    lines = server_out.splitlines()
+    assert f"CANCEL REQUEST {goal_id} 0" in lines, server_err
+    assert any(line.startswith(f"CANCELED {goal_id} [0, 1") for line in lines)
+    assert f"CANCEL REQUEST {stranger} 2" in lines

@@ -1,5 +1,5 @@
 """`rostool action`: list, info, show, send-goal, cancel (actionlib over topics, ROS 1); on ROS 2 list, info
-and send-goal in ros2 action's forms and output."""
+and send-goal in ros2 action's forms and output, and cancel over ACTION/_action/cancel_goal."""
 
 from __future__ import annotations
 
@@ -26,7 +26,8 @@ def action() -> None:
     """Use actionlib actions (ROS 1) and ROS 2 actions: list servers, send goals and follow them, cancel.
 
     Goal, result and feedback types come from .action files in source trees (--interfaces,
-    ROS_PACKAGE_PATH, the current workspace) or the built-in types: no catkin build needed.
+    ROS_PACKAGE_PATH, the current workspace; on ROS 2 also AMENT_PREFIX_PATH) or the built-in types: no
+    catkin or colcon build needed.
 
     \b
     Examples:
@@ -35,6 +36,7 @@ def action() -> None:
       rostool action send-goal /navigate_2d_action "{point: {x: 1.0, y: 2.0}}" --feedback
       rostool action cancel /navigate_2d_action
       rostool --ros2 action send-goal /fibonacci example_interfaces/action/Fibonacci "{order: 5}" --feedback
+      rostool --ros2 action cancel /fibonacci
     """
 
 
@@ -198,6 +200,7 @@ def send_goal(
     Examples:
       rostool action send-goal /navigate_2d_action "{point: {x: 1.0, y: 2.0, z: 0.0}}" --feedback
       rostool action send-goal /fibonacci actionlib_tutorials/Fibonacci "{order: 5}" --timeout 30
+      rostool --ros2 action send-goal /count robo_msgs/action/Count "{count: 3}" --interfaces ~/ros2_ws
     """
     from rostool.graph.ros1.actions import send_goal as run_goal
     from rostool.interfaces.sources import interfaces
@@ -209,7 +212,7 @@ def send_goal(
         from rostool.graph.ros2.actions import send_goal as run_ros2_goal
 
         render2 = _Ros2Renderer(as_json, show_feedback)
-        with ros2_graph(ctx) as graph2:
+        with ros2_graph(ctx, interface_paths) as graph2:
             outcome2 = run_ros2_goal(
                 graph2, name, type_name, goal, timeout, on_event=render2.event, on_sent=render2.sent,
                 on_waiting=lambda text: click.echo(text, err=True), on_cancel=render2.canceling,
@@ -320,19 +323,49 @@ def _indented(message: Any) -> str:
 @click.argument("name", metavar="ACTION")
 @click.argument("goal_id", required=False)
 @click.option("--all", "cancel_all", is_flag=True, help="Cancel every goal (the default without GOAL_ID).")
+@json_option
 @click.pass_context
-def cancel(ctx: click.Context, name: str, goal_id: str | None, cancel_all: bool) -> None:
+def cancel(ctx: click.Context, name: str, goal_id: str | None, cancel_all: bool, as_json: bool) -> None:
     """Ask an action server to cancel one goal (by its id), or every goal when no GOAL_ID is given.
+
+    On ROS 2 GOAL_ID is the id send-goal printed (32 hex digits) and the goals the server is canceling are
+    printed; a server that refuses (or does not know the goal) makes the exit status 1.
 
     \b
     Examples:
       rostool action cancel /navigate_2d_action
       rostool action cancel /navigate_2d_action /rostool-4242-1-1712345678.5
+      rostool --ros2 action cancel /fibonacci 5f1b4c0e2d0a4b8e9c3f6a7d8e9f0a1b
     """
     from rostool.graph.ros1.actions import cancel_goals
 
     if cancel_all and goal_id is not None:
         raise RostoolError("give a GOAL_ID or --all, not both (`rostool action info ACTION` lists goal ids)")
-    with ros1_graph(ctx, "action cancel (on ROS 2: Ctrl+C on send-goal)") as graph:
+    if is_ros2(ctx):
+        _cancel_ros2(ctx, name, goal_id, as_json)
+        return
+    with ros1_graph(ctx, "actions") as graph:
         cancel_goals(graph, name, goal_id or "")
-    click.echo(f"canceled {goal_id or 'every goal'} of {name}")
+    if as_json:
+        print_json({"action": name, "goal_id": goal_id})
+    else:
+        click.echo(f"canceled {goal_id or 'every goal'} of {name}")
+
+
+def _cancel_ros2(ctx: click.Context, name: str, goal_id: str | None, as_json: bool) -> None:
+    from rostool.graph.ros2.actions import cancel_goals
+    from rostool.output.plain import to_plain
+
+    with ros2_graph(ctx) as graph:
+        action = graph.resolve(name)
+        canceling = cancel_goals(graph, action, goal_id)
+    if as_json:
+        goals = [{"goal_id": g.goal_id, "stamp": to_plain(g.stamp, "ros2")} for g in canceling]
+        print_json({"action": action, "goals_canceling": goals})
+        return
+    if not canceling:
+        click.echo(f"No goals of {action} to cancel")
+    else:
+        click.echo(f"Canceling {len(canceling)} goal(s) of {action}:")
+    for goal in canceling:
+        click.echo(f"    {goal.goal_id}")

@@ -1,5 +1,5 @@
 """`rostool service`: list, type, info, uri, node, args, find, call (rosservice's forms and output; on ROS 2
-list, type, find and call in ros2 service's forms and output)."""
+list, type, info, find and call in ros2 service's forms and output)."""
 
 from __future__ import annotations
 
@@ -25,8 +25,9 @@ ROS2_WAIT_SECONDS = 5.0  # how long `call` gives a seen (or given) service's ser
 
 @click.group()
 def service() -> None:
-    """Inspect and call services (like rosservice). Types come from the service itself and from
-    .srv files in source trees (--interfaces, ROS_PACKAGE_PATH, the current workspace): no build needed.
+    """Inspect and call services (like rosservice; on ROS 2 like ros2 service). Types come from the service
+    itself and from .srv files in source trees (--interfaces, ROS_PACKAGE_PATH, the current workspace; on
+    ROS 2 also AMENT_PREFIX_PATH): no build needed.
 
     \b
     Examples:
@@ -35,6 +36,7 @@ def service() -> None:
       rostool service call /sum_two_ints 7 8
       rostool service call /sum_two_ints "{a: 7, b: 8}" --json
       rostool --ros2 service call /add_two_ints example_interfaces/srv/AddTwoInts "{a: 1, b: 2}"
+      rostool --ros2 service info /add_two_ints
     """
 
 
@@ -46,10 +48,10 @@ def is_ros2(ctx: click.Context) -> bool:
 
 
 @contextmanager
-def ros2_graph(ctx: click.Context) -> Iterator[Ros2Graph]:
+def ros2_graph(ctx: click.Context, interface_paths: tuple[str, ...] = ()) -> Iterator[Ros2Graph]:
     from rostool.graph.ros2.graph import Ros2Graph
 
-    with live_graph(ctx) as graph:
+    with live_graph(ctx, interface_paths) as graph:
         if not isinstance(graph, Ros2Graph):
             raise RostoolError("this form needs a ROS 2 graph (--ros2 or ROS_VERSION=2)")
         yield graph
@@ -224,21 +226,31 @@ def args(ctx: click.Context, name: str, interface_paths: tuple[str, ...]) -> Non
 
 @service.command("info")
 @click.argument("name", metavar="SERVICE")
+@click.option("-v", "--verbose", is_flag=True, help="ROS 2: each client and server with node, GIDs, QoS.")
 @interfaces_option
 @json_option
 @click.pass_context
-def info(ctx: click.Context, name: str, interface_paths: tuple[str, ...], as_json: bool) -> None:
-    """Print a service's node, URI, type and request arguments.
+def info(
+    ctx: click.Context, name: str, verbose: bool, interface_paths: tuple[str, ...], as_json: bool
+) -> None:
+    """Print a service's node, URI, type and request arguments (ROS 2: its type and how many clients and
+    servers it has, as ros2 service info does).
 
     \b
-    Example:
+    Examples:
       rostool service info /sum_two_ints
+      rostool --ros2 service info /add_two_ints -v
     """
     from rostool.graph.ros1.services import service_info
     from rostool.interfaces.sources import InterfaceError, interfaces
     from rostool.interfaces.srv import load_service
 
-    with ros1_graph(ctx, "service info (on ROS 2: service list -t -n)") as graph:
+    if is_ros2(ctx):
+        _info_ros2(ctx, name, verbose, as_json)
+        return
+    if verbose:
+        raise RostoolError("service info -v applies to ROS 2 graphs only")
+    with ros1_graph(ctx, "service info") as graph:
         found = service_info(graph.master, name)
     try:
         request_args: str | None = load_service(interfaces(interface_paths), found.type).request_args()
@@ -254,6 +266,65 @@ def info(ctx: click.Context, name: str, interface_paths: tuple[str, ...], as_jso
         click.echo(f"Args: ? (no {found.type}.srv found; see --interfaces)")
     else:
         click.echo(f"Args: {request_args}")
+
+
+def _info_ros2(ctx: click.Context, name: str, verbose: bool, as_json: bool) -> None:
+    """ros2 service info: the type, then the clients and servers (counted, or listed with -v)."""
+    with ros2_graph(ctx) as graph:
+        found = graph.service_info(name)
+        if found is None:
+            raise RostoolError(
+                f"unknown service {graph.resolve(name)}: no client or server announces it "
+                "(see `rostool service list -a`)"
+            )
+    if as_json:
+        print_json(found)
+        return
+    types = found["types"]
+    lines = [f"Type: {types[0] if len(types) == 1 else types}"]
+    for title, rows in (("Clients", found["clients"]), ("Services", found["servers"])):
+        lines.append(f"{title} count: {len(rows)}")
+        for row in rows if verbose else []:
+            lines += ["", *_endpoint_lines(row)]
+        if verbose:
+            lines.append("")
+    click.echo("\n".join(lines))
+
+
+_ENDPOINT_TITLES = {
+    ("CLIENT", "request"): "Request Writer", ("CLIENT", "reply"): "Response Reader",
+    ("SERVER", "request"): "Request Reader", ("SERVER", "reply"): "Response Writer",
+}  # fmt: skip
+
+
+def _endpoint_lines(row: dict[str, Any]) -> list[str]:
+    """One client or server the way rclpy's ServiceEndpointInfo prints it."""
+    namespace, _, node = row["node"].rpartition("/")
+    endpoints = row["endpoints"]
+    lines = [
+        f"Node name: {node}", f"Node namespace: {namespace or '/'}", f"Service type: {row['type']}",
+        f"Service type hash: {row['type_hash'] or 'UNKNOWN'}", f"Endpoint type: {row['endpoint_type']}",
+        f"Endpoint count: {len(endpoints)}",
+    ]  # fmt: skip
+    role = row["endpoint_type"]
+    kinds = [kind for kind in ("request", "reply") if kind in endpoints]
+    titled = [(_ENDPOINT_TITLES[(role, kind)], endpoints[kind]) for kind in kinds]
+    if len(titled) == 1:
+        lines += [f"GID: {titled[0][1]['gid']}", "QoS profile:", *_qos_lines(titled[0][1]["qos"], "  ")]
+        return lines
+    lines += ["GIDs:", *(f" - {title} : {e['gid']}" for title, e in titled), "QoS profiles:"]
+    for title, endpoint in titled:
+        lines += [f" - {title} :", *_qos_lines(endpoint["qos"], "      ")]
+    return lines
+
+
+def _qos_lines(qos: dict[str, Any], indent: str) -> list[str]:
+    depth = f"KEEP_LAST ({qos['depth']})" if qos["depth"] else "KEEP_ALL"
+    return [
+        f"{indent}Reliability: {str(qos['reliability']).upper()}",
+        f"{indent}History (Depth): {depth}",
+        f"{indent}Durability: {str(qos['durability']).upper()}",
+    ]
 
 
 @service.command("find")
@@ -321,6 +392,7 @@ def call(
       rostool service call /reset
       rostool --ros2 service call /add_two_ints example_interfaces/srv/AddTwoInts "{a: 1, b: 2}"
       rostool --ros2 service call /add_two_ints "{a: 1, b: 2}" --json
+      rostool --ros2 service call /rate robo_msgs/srv/Rate "{factor: 2}" --interfaces ~/ros2_ws
     """
     from rostool.graph.ros1 import services
     from rostool.interfaces.sources import interfaces
@@ -328,7 +400,7 @@ def call(
     from rostool.output.yaml_text import to_yaml
 
     if is_ros2(ctx):
-        with ros2_graph(ctx) as graph2:
+        with ros2_graph(ctx, interface_paths) as graph2:
             request, response = _call_ros2(graph2, name, values, wait, timeout)
             if as_json:
                 print_json(to_plain(response, "ros2"))

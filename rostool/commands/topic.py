@@ -188,6 +188,7 @@ def find(ctx: click.Context, type_name: str) -> None:
 @click.option("--noarr", is_flag=True, help="Show arrays as their type and length.")
 @click.option("--nostr", is_flag=True, help="Show strings as their length.")
 @click.option("--filter", "filter_text", help="Only messages where EXPR holds, e.g. \"m.data == 'go'\".")
+@interfaces_option
 @click.pass_context
 @qos_options
 def echo(
@@ -202,6 +203,7 @@ def echo(
     noarr: bool,
     nostr: bool,
     filter_text: str | None,
+    interface_paths: tuple[str, ...],
     qos: QosRequest,
 ) -> None:
     """Print the messages of a topic (YAML like rostopic echo, or --json/--csv).
@@ -223,7 +225,7 @@ def echo(
     limit = 1 if once else count
     out = sys.stdout
     interactive = out.isatty()
-    with live_graph(ctx) as graph:
+    with live_graph(ctx, interface_paths) as graph:
         use_qos(graph, qos)
         renderer = EchoRenderer(mode, fields, noarr, nostr, style=graph.time_style)
         if graph.topic_type(name) is None:

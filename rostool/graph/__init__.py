@@ -11,6 +11,7 @@ if TYPE_CHECKING:
     from rostool.graph.base import Graph
 
 DEFAULT_MASTER_URI = "http://localhost:11311"
+INTERFACES_ENV = "ROSTOOL_INTERFACES"
 
 
 def select_ros_version(explicit: int | None) -> int:
@@ -35,15 +36,24 @@ def _port_answers(host: str, port: int, timeout: float = 0.2) -> bool:
         return False
 
 
+def interface_paths_from_env() -> tuple[str, ...]:
+    """ROSTOOL_INTERFACES split as click splits it for --interfaces (at os.pathsep): verbs without the
+    option (topic echo) find custom types there too."""
+    value = os.environ.get(INTERFACES_ENV, "")
+    return tuple(p for p in value.split(os.pathsep) if p.strip())
+
+
 def open_graph(
     explicit_version: int | None, node_name: str = "rostool", interface_paths: Sequence[str] = ()
 ) -> Graph:
-    """Connect to the live graph of the selected ROS version."""
+    """Connect to the live graph of the selected ROS version. Types missing from the built-in ones are looked
+    for in `interface_paths` (default: ROSTOOL_INTERFACES), ROS_PACKAGE_PATH and the workspace."""
     version = select_ros_version(explicit_version)
+    interface_paths = tuple(interface_paths) or interface_paths_from_env()
     if version == 2:
         from rostool.graph.ros2.graph import Ros2Graph
 
-        return Ros2Graph(node_name)
+        return Ros2Graph(node_name, interface_paths=interface_paths)
     from rostool.graph.ros1.graph import Ros1Graph
 
     return Ros1Graph(node_name, interface_paths)

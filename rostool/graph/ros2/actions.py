@@ -10,8 +10,9 @@ An action `/fibonacci` of type `pkg/action/Fibonacci` is three services and two 
   `/fibonacci/_action/status` (`action_msgs/msg/GoalStatusArray`; reliable, transient_local, depth 1).
 
 `goal_id` is a unique_identifier_msgs/UUID (16 random bytes the client picks). The derived types are built
-here the way rosidl_parser's `Action` derives them; rosbags' stores hold action_msgs and
-unique_identifier_msgs but no action types, so the goal, result and feedback come from .action text.
+the way rosidl_parser's `Action` derives them (definitions.py); rosbags' stores hold action_msgs and
+unique_identifier_msgs but no action types, so the goal, result and feedback come from .action text:
+rostool's own few, or .action files in the interface sources.
 """
 
 from __future__ import annotations
@@ -23,11 +24,9 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from rosbags.interfaces import Nodetype
-from rosbags.typesys import get_types_from_msg
-
 from rostool.errors import RostoolError
 from rostool.graph.ros2 import dds
+from rostool.graph.ros2.definitions import action_types
 from rostool.graph.ros2.names import resolve, topic_to_dds
 from rostool.graph.ros2.services import ServiceClient
 
@@ -91,39 +90,19 @@ class ActionTypes:
 
 
 def register_action(types: TypeSupport, action_type: str, text: str | None = None) -> ActionTypes:
-    """Make an action's goal, result, feedback and derived service/message types known to the store."""
+    """Make an action's goal, result, feedback and derived service/message types known to the store.
+
+    Looked up in order: the store, `text`, rostool's built-in definitions, then .action source files."""
     name = action_store_name(action_type)
     found = ActionTypes(name)
-    if types.knows(found.feedback_message):
+    if types.in_store(found.feedback_message):
         return found
     text = text if text is not None else ACTION_DEFINITIONS.get(name)
     if text is None:
-        raise RostoolError(
-            f"unknown action type {action_type!r}: rostool knows {', '.join(sorted(ACTION_DEFINITIONS))}"
-        )
-    parts = ("\n" + text).split("\n---\n")
-    if len(parts) != 3:
-        raise RostoolError(f"the definition of {name} needs goal, result and feedback separated by ---")
-    pkg, _, short = name.split("/")
-    typs: dict[str, Any] = {}
-    for suffix, body in zip(("Goal", "Result", "Feedback"), parts, strict=True):
-        # rosbags' .msg parser names types `pkg/msg/...`; parse there, then file under `pkg/action/`
-        parsed = get_types_from_msg(body + "\n", f"{pkg}/msg/{short}_{suffix}")
-        typs[found.part(suffix)] = parsed.pop(f"{pkg}/msg/{short}_{suffix}")
-        typs.update(parsed)
-
-    def ref(type_name: str) -> Any:
-        return (Nodetype.NAME, type_name)
-
-    goal_id = ("goal_id", ref(UUID_TYPE))
-    typs[found.send_goal + "_Request"] = ([], [goal_id, ("goal", ref(found.part("Goal")))])
-    stamp = ("stamp", ref("builtin_interfaces/msg/Time"))
-    typs[found.send_goal + "_Response"] = ([], [("accepted", (Nodetype.BASE, ("bool", 0))), stamp])
-    typs[found.get_result + "_Request"] = ([], [goal_id])
-    status = ("status", (Nodetype.BASE, ("int8", 0)))
-    typs[found.get_result + "_Response"] = ([], [status, ("result", ref(found.part("Result")))])
-    typs[found.feedback_message] = ([], [goal_id, ("feedback", ref(found.part("Feedback")))])
-    types.register(typs)
+        if types.knows(found.feedback_message):
+            return found
+        raise types.unknown("action", name, sorted(ACTION_DEFINITIONS))
+    types.register(action_types(name, text, f"the definition of {name}"))
     return found
 
 
@@ -200,7 +179,8 @@ class ActionClient:
         from rostool.interfaces.fill import FillError, build_message
 
         try:
-            return build_message(self._store.store, self.types.part("Goal"), value)
+            goal_type = self.types.part("Goal")
+            return build_message(self._store.store, goal_type, self._store.with_defaults(goal_type, value))
         except FillError as err:
             raise RostoolError(f"{err} (the goal of {self.types.name})") from err
 
@@ -335,3 +315,43 @@ def send_goal(
     if on_event is not None:
         on_event(GoalEvent("result", int(response.status), response.result))
     return GoalOutcome(hex_id, int(response.status), response.result)
+
+
+def parse_goal_id(text: str) -> bytes:
+    """A goal id as send-goal prints it (32 hex digits), dashed UUID spellings too."""
+    try:
+        return uuid.UUID(text.strip()).bytes
+    except ValueError:
+        raise RostoolError(
+            f"bad goal id {text!r}: give the 32 hex digits `rostool action send-goal` printed"
+        ) from None
+
+
+@dataclass
+class CancelingGoal:
+    goal_id: str  # hex
+    stamp: Any  # builtin_interfaces/msg/Time: when the server accepted the goal
+
+
+def cancel_goals(
+    graph: Ros2Graph, name: str, goal_id: str | None, timeout: float = 5.0
+) -> list[CancelingGoal]:
+    """Ask the server of action `name` to cancel one goal, or every goal when `goal_id` is None (a zero goal
+    id and a zero stamp: action_msgs/srv/CancelGoal's "cancel all"); the goals it is canceling."""
+    from rostool.interfaces.fill import build_message
+
+    action = resolve(name)
+    wanted = parse_goal_id(goal_id) if goal_id is not None else bytes(16)
+    client = ServiceClient(graph.session, action + ACTION_INFIX + "cancel_goal", CANCEL_SERVICE)
+    if not client.wait_for_server(timeout):
+        raise RostoolError(
+            f"no action server for {action} matched within {timeout:g} s (see `rostool action list`)"
+        )
+    info = {"goal_id": {"uuid": list(wanted)}}  # the stamp stays zero: no "goals accepted before"
+    request = build_message(graph.types.store, CANCEL_SERVICE + "_Request", {"goal_info": info})
+    response = client.call(request, timeout)
+    what = f"goal {wanted.hex()}" if goal_id is not None else "every goal"
+    if response.return_code != 0:
+        why = CANCEL_ERRORS.get(response.return_code, f"return code {response.return_code}")
+        raise RostoolError(f"canceling {what} of {action} failed: {why}")
+    return [CancelingGoal(bytes(g.goal_id.uuid).hex(), g.stamp) for g in response.goals_canceling]

@@ -12,7 +12,7 @@ import os
 import sys
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import replace
 from typing import TYPE_CHECKING, Any, Literal
 
@@ -131,10 +131,17 @@ class Ros2Graph:
     ros_version = 2
     time_style: Literal["ros1", "ros2"] = "ros2"
 
-    def __init__(self, node_name: str = "rostool", distro: str | None = None, anonymous: bool = True) -> None:
+    def __init__(
+        self,
+        node_name: str = "rostool",
+        distro: str | None = None,
+        anonymous: bool = True,
+        interface_paths: Sequence[str] = (),
+    ) -> None:
         dds.domain_id()  # a bad ROS_DOMAIN_ID fails before anything starts
         dds.discovery_range()
-        self.types = TypeSupport(distro or distro_from_env())
+        self.interface_paths = tuple(interface_paths)
+        self.types = TypeSupport(distro or distro_from_env(), self.interface_paths)
         self.qos_request = dds.QosRequest()
         self.warn: Callable[[str], None] = lambda text: print(f"WARNING: {text}", file=sys.stderr)
         base = node_name.strip("/")
@@ -335,6 +342,47 @@ class Ros2Graph:
             if servers
         ]
 
+    def service_info(self, service: str) -> dict[str, Any] | None:
+        """ros2 service info's facts: the service's types, its clients and its servers (each with node, type
+        hash, the GIDs and QoS of its two DDS endpoints); None when no client or server announces it."""
+        resolved = resolve(service)
+        cache = self._settled(require_peers=True)
+        owners = self._owners(cache)
+        # rmw_cyclonedds_cpp: a client writes requests and reads replies, a server the other way round
+        sides: dict[tuple[str, str, str], list[Endpoint]] = {}
+        types: set[str] = set()
+        for endpoint in cache.remote_endpoints():
+            ros = endpoint.ros
+            if ros is None or ros[1] != resolved or ros[0] not in ("request", "reply"):
+                continue
+            is_client = endpoint.is_writer == (ros[0] == "request")
+            node = owners.get(endpoint.guid, UNKNOWN_NODE)
+            sides.setdefault(("CLIENT" if is_client else "SERVER", node, ros[0]), []).append(endpoint)
+            if ros[0] == "request":
+                types.add(service_type(endpoint.type_name))
+        if not sides:
+            return None
+        found: dict[str, Any] = {"name": resolved, "types": sorted(types), "clients": [], "servers": []}
+        for role, node in sorted({(role, node) for role, node, _ in sides}):
+            requests = sides.get((role, node, "request"), [])
+            replies = sides.get((role, node, "reply"), [])
+            for index in range(max(len(requests), len(replies))):
+                pair = {
+                    "request": requests[index] if index < len(requests) else None,
+                    "reply": replies[index] if index < len(replies) else None,
+                }
+                first = pair["request"] or pair["reply"]
+                assert first is not None
+                found["clients" if role == "CLIENT" else "servers"].append({
+                    "node": node, "endpoint_type": role, "type": service_type(first.type_name),
+                    "type_hash": first.type_hash,
+                    "endpoints": {
+                        kind: {"gid": e.guid.hex("."), "is_writer": e.is_writer, "qos": vars(e.qos).copy()}
+                        for kind, e in pair.items() if e is not None
+                    },
+                })  # fmt: skip
+        return found
+
     def find_service_type(self, service: str) -> str | None:
         """The type a server of `service` announces (`pkg/srv/Name`), None when no server is seen."""
         resolved = resolve(service)
@@ -357,13 +405,14 @@ class Ros2Graph:
     def build_message(self, type_name: str, value: Any) -> Any:
         from rostool.interfaces.fill import build_message
 
-        return build_message(self.types.store, self.types.store_name(type_name), value)
+        store_name = self.types.store_name(type_name)
+        return build_message(self.types.store, store_name, self.types.with_defaults(store_name, value))
 
     # --- parameters ---------------------------------------------------------------------------
     def _no_params(self) -> RostoolError:
         return RostoolError(
-            "ROS 2 parameters belong to nodes: use `rostool param list|get|set|describe NODE ...` "
-            "(delete, dump and load are ROS 1 forms)"
+            "ROS 2 parameters belong to nodes: use `rostool param list|get|set|describe|delete|dump|load "
+            "NODE ...`"
         )
 
     def param_names(self) -> list[str]:

@@ -10,8 +10,9 @@ uses a different header, so its services do not interoperate with Cyclone's (a R
 The DDS types rostool registers for service topics carry the header as two leading members (see
 `TypeSupport._with_request_header` for why, and which peers that excludes).
 
-rosbags' type stores hold messages only; the service types rostool needs are defined here from their
-.srv text (rcl_interfaces parameter services, example_interfaces/AddTwoInts).
+rosbags' type stores hold messages only; the service types rostool itself needs are defined here from their
+.srv text (rcl_interfaces parameter services, example_interfaces/AddTwoInts); others come from .srv files
+in the interface sources (see definitions.py).
 """
 
 from __future__ import annotations
@@ -23,10 +24,9 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from rosbags.typesys import get_types_from_msg
-
 from rostool.errors import RostoolError
 from rostool.graph.ros2 import dds
+from rostool.graph.ros2.definitions import service_types
 from rostool.graph.ros2.names import reply_topic, request_topic
 from rostool.graph.ros2.types import TypeSupport
 
@@ -54,7 +54,9 @@ SRV_DEFINITIONS: dict[str, str] = {
 
 
 def register_service(types: TypeSupport, srv_type: str, text: str | None = None) -> tuple[str, str]:
-    """Make `pkg/srv/Name_Request` and `_Response` known to the session's store; returns both names."""
+    """Make `pkg/srv/Name_Request` and `_Response` known to the session's store; returns both names.
+
+    Looked up in order: the store, `text`, rostool's built-in definitions, then .srv source files."""
     parts = srv_type.strip().strip("/").split("/")
     if len(parts) == 2:
         pkg, name = parts
@@ -65,21 +67,14 @@ def register_service(types: TypeSupport, srv_type: str, text: str | None = None)
         raise RostoolError(f"bad service type {srv_type!r}: use pkg/srv/Name (or pkg/Name)")
     full = f"{pkg}/{kind}/{name}"
     request, response = f"{full}_Request", f"{full}_Response"
-    if types.knows(request) and types.knows(response):
+    if types.in_store(request) and types.in_store(response):
         return request, response
     text = text if text is not None else SRV_DEFINITIONS.get(full)
     if text is None:
-        raise RostoolError(
-            f"unknown service type {srv_type!r}: rostool knows {', '.join(sorted(SRV_DEFINITIONS))}"
-        )
-    request_text, _, response_text = ("\n" + text).partition("\n---\n")
-    typs: dict[str, Any] = {}
-    for part, body in (("Request", request_text), ("Response", response_text)):
-        # rosbags' .msg parser names types `pkg/msg/...`; parse there, then file under `pkg/srv/`
-        parsed = get_types_from_msg(body + "\n", f"{pkg}/msg/{name}_{part}")
-        typs[f"{full}_{part}"] = parsed.pop(f"{pkg}/msg/{name}_{part}")
-        typs.update(parsed)
-    types.register(typs)
+        if types.knows(request) and types.knows(response):
+            return request, response
+        raise types.unknown("service", full, sorted(SRV_DEFINITIONS))
+    types.register(service_types(full, text, f"the definition of {full}"))
     return request, response
 
 
