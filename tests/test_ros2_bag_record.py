@@ -6,6 +6,7 @@ bytes of ../shared/testdata/ros2/talker_mcap played into the graph and compared 
 
 from __future__ import annotations
 
+import json
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -13,7 +14,16 @@ from pathlib import Path
 import pytest
 import yaml
 
-from tests.support import TESTDATA, debian, require_ros1_peers, rostool, rostool_popen, stop, wait_until
+from tests.support import (
+    TESTDATA,
+    debian,
+    interface_workspace,
+    require_ros1_peers,
+    rostool,
+    rostool_popen,
+    stop,
+    wait_until,
+)
 from tests.test_ros2_graph import ros2_env
 
 TALKER = TESTDATA / "ros2" / "talker_mcap"
@@ -167,3 +177,32 @@ def test_qos_options_are_refused_on_ros1(tmp_path: Path) -> None:
     assert refused.returncode != 0
     assert refused.stderr.count("\n") == 1, refused.stderr
     assert not list(tmp_path.iterdir())
+
+
+def test_custom_types_from_sources_are_recorded_self_describing(tmp_path: Path) -> None:
+    from tests.test_ros2_interfaces import SOURCES
+
+    env = ros2_env()
+    sources = interface_workspace(tmp_path / "ws", SOURCES)
+    status = "{name: r2, parts: [{label: arm, weight: 1.5}], where: {x: 1.0}}"
+    publisher = rostool_popen(["topic", "pub", "/status", "robo_msgs/msg/Status", status, "-r", "10",
+                               "--interfaces", str(sources)], env)  # fmt: skip
+    out = tmp_path / "custom.mcap"
+    try:
+        blind_out = tmp_path / "blind.mcap"
+        blind = rostool(["bag", "record", "/status", "-O", str(blind_out), "--duration", "2"], env)
+        recorded = rostool(
+            ["bag", "record", "/status", "-O", str(out), "--duration", "2", "--interfaces", str(sources)], env
+        )
+    finally:
+        stop(publisher)
+    assert "unknown message type 'robo_msgs/msg/Status'" in blind.stderr, blind.stderr
+    assert "recorded 0 messages" in blind.stderr and "Traceback" not in blind.stderr
+    assert recorded.returncode == 0, recorded.stderr
+    # the bag carries the definitions: reading it needs no --interfaces
+    echoed = rostool(["bag", "echo", str(out), "/status", "-n", "1", "--json"], ros2_env())
+    assert json.loads(echoed.stdout) == {
+        "name": "r2",
+        "parts": [{"label": "arm", "weight": 1.5}],
+        "where": {"x": 1.0, "y": 0.0, "z": 0.0},
+    }, echoed.stderr

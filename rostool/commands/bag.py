@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, Any
 import click
 
 from rostool.bag.typestores import DEFAULT_DISTRO, DISTROS
+from rostool.commands._common import interfaces_option
 from rostool.commands._qos import qos_options, use_qos
 from rostool.errors import RostoolError
 from rostool.graph.ros2.dds import QosRequest
@@ -494,6 +495,7 @@ def _parse_duration(text: str | None) -> float | None:
 @click.option("-j", "--bz2", "compression", flag_value="bz2", help="Compress .bag chunks with bz2.")
 @click.option("-q", "--quiet", is_flag=True, help="No progress and no summary on stderr.")
 @click.option("--force", is_flag=True, help="Overwrite an existing output file.")
+@interfaces_option
 @qos_options
 @click.pass_context
 def record(
@@ -512,6 +514,7 @@ def record(
     compression: str | None,
     quiet: bool,
     force: bool,
+    interface_paths: tuple[str, ...],
     qos: QosRequest,
 ) -> None:
     """Record topics of the live graph into a bag, until Ctrl+C (or --duration / --size).
@@ -563,7 +566,7 @@ def record(
         raise RostoolError("--lz4/--bz2 compress ROS 1 .bag chunks; leave them out with --format mcap/db3")
     progress = None if quiet or not sys.stderr.isatty() else _RecordProgress()
     stop = threading.Event()
-    with live_graph(ctx) as graph:
+    with live_graph(ctx, interface_paths) as graph:
         use_qos(graph, qos)
         recorder = Recorder(_record_source(graph, progress), options)
         with stop_on_signals(stop):
