@@ -33,8 +33,3 @@ class CrossVersionStores:
             typs.pop("std_msgs/msg/Header", None)
             store.register(typs)
         return store
-
-
-def ros2_store(src: Typestore, src_msgtype: str, dst_msgtype: str) -> Typestore:
-    """A fresh store holding `dst_msgtype` (a ROS 1 type renamed for ROS 2) with ROS 2's Header."""
-    return CrossVersionStores(2).store_for(src, src_msgtype, dst_msgtype)

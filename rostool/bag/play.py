@@ -7,6 +7,10 @@ name (`pkg/msg/T` -> `pkg/T`); the first message of each topic is checked agains
 whose type has no ROS 1 equivalent (e.g. rcl_interfaces/msg/Log) are skipped with a warning; when no
 topic is left, that is an error.
 
+--clock publishes the bag time on /clock at --hz while playing, and the stamp of every message played.
+`play_ros2.Ros2Player` plays into ROS 2 graphs on this schedule: it replaces `_plan` (how a connection is
+published) and the clock message.
+
 Timing: see `schedule.py` (absolute due times, no drift). The playback origin is the first message played
 (after -s), as rosbag's view begins at its first message: a pass never starts with a dead wait.
 """
@@ -73,8 +77,9 @@ class RawPublisher(Protocol):
 class _Plan:
     topic: str  # where it is published (after remapping)
     publisher: RawPublisher
-    convert: Callable[[Any], Any] | None  # CDR -> ROS 1 bytes for ROS 2 bags
-    checked: bool = True  # the first converted message has been decoded with the ROS 1 type
+    convert: Callable[[Any], Any] | None  # bytes of the bag's ROS version -> the graph's
+    # Decodes a converted message with the graph's own type; dropped once the first one passed.
+    verify: Callable[[Any], object] | None = None
 
 
 def parse_remaps(values: Collection[str]) -> dict[str, str]:
@@ -163,6 +168,9 @@ class Console:
 
 
 class Player:
+    graph_name = "ROS 1"  # in messages about what cannot be played
+    clock_per_message = True  # /clock also carries every played message's stamp, besides the --hz ticks
+
     def __init__(
         self,
         reader: BagReader,
@@ -181,7 +189,7 @@ class Player:
         self.result = PlayResult()
         self._plans: dict[int, _Plan] = {}
         self._publishers: dict[str, tuple[RawPublisher, str]] = {}  # topic -> (publisher, md5 or type)
-        self._clock_pub: Publisher | None = None
+        self._clock_pub: RawPublisher | None = None
         self._next_tick = 0.0
         self._next_ui = 0.0
         self._step = False
@@ -197,33 +205,46 @@ class Player:
 
     # -- advertising -----------------------------------------------------------------------------
     def advertise(self) -> None:
-        """One publisher per topic; skip (and warn about) what cannot be played in ROS 1."""
+        """One publisher per topic; skip (and warn about) what cannot be played in this graph."""
         for conn in self.connections:
-            topic = self.options.remap.get(conn.topic, conn.topic)
-            try:
-                msg_type, convert, latch = self._type_of(conn)
-            except RostoolError as err:
-                self._skip(conn.topic, str(err), warn=False)
-                continue
-            existing = self._publishers.get(topic)
-            if existing is not None:
-                publisher, md5 = existing
-                if md5 != msg_type.md5sum:
-                    self._skip(conn.topic, f"a second type {msg_type.name} on {topic}", warn=False)
-                    continue
-            else:
-                publisher = self.graph.node.advertise(topic, msg_type, latch)
-                self._publishers[topic] = (publisher, msg_type.md5sum)
-            self._plans[id(conn)] = _Plan(topic, publisher, convert, checked=convert is None)
+            self._plan(conn)
         if not self._plans:
             if self.result.skipped:
                 reasons = "; ".join(f"{t}: {why}" for t, why in sorted(self.result.skipped.items()))
-                raise RostoolError(f"nothing to play in ROS 1: {reasons}")
+                raise RostoolError(f"nothing to play in {self.graph_name}: {reasons}")
             return
         for topic, why in self.result.skipped.items():  # only now: no warning before that error
             self.warn(f"skipping {topic}: {why}")
         if self.options.clock:
-            self._clock_pub = self.graph.node.advertise("/clock", self.types.builtin("rosgraph_msgs/Clock"))
+            self._clock_pub = self._advertise_clock()
+
+    def _plan(self, conn: Connection) -> None:
+        """Plan how `conn`'s messages are published, or skip its topic."""
+        topic = self.options.remap.get(conn.topic, conn.topic)
+        try:
+            msg_type, convert, latch = self._type_of(conn)
+        except RostoolError as err:
+            self._skip(conn.topic, str(err), warn=False)
+            return
+        existing = self._publishers.get(topic)
+        if existing is not None:
+            publisher, md5 = existing
+            if md5 != msg_type.md5sum:
+                self._skip(conn.topic, f"a second type {msg_type.name} on {topic}", warn=False)
+                return
+        else:
+            publisher = self.graph.node.advertise(topic, msg_type, latch)
+            self._publishers[topic] = (publisher, msg_type.md5sum)
+        verify = None if convert is None else msg_type.deserialize
+        self._plans[id(conn)] = _Plan(topic, publisher, convert, verify)
+
+    def _advertise_clock(self) -> RawPublisher:
+        publisher: Publisher = self.graph.node.advertise("/clock", self.types.builtin("rosgraph_msgs/Clock"))
+        return publisher
+
+    def _clock_message(self, stamp: int) -> bytes:
+        """A rosgraph_msgs/Clock message of the graph's ROS version for bag time `stamp` (ns)."""
+        return _CLOCK.pack(*divmod(stamp, 1_000_000_000))
 
     def _skip(self, topic: str, why: str, warn: bool = True) -> None:
         if topic not in self.result.skipped:
@@ -298,12 +319,12 @@ class Player:
                 continue
             try:
                 payload = plan.convert(data)
-                if not plan.checked:
-                    self.types.builtin(to_ros1_name(conn.msgtype)).deserialize(payload)
-                    plan.checked = True
+                if plan.verify is not None:
+                    plan.verify(payload)
+                    plan.verify = None
             except Exception:
-                if not plan.checked:
-                    self._skip(conn.topic, f"{conn.msgtype} is laid out differently in ROS 1")
+                if plan.verify is not None:
+                    self._skip(conn.topic, f"{conn.msgtype} is laid out differently in {self.graph_name}")
                     del plans[id(conn)]
                 continue
             yield plan, stamp, payload
@@ -320,7 +341,10 @@ class Player:
                 self._started = True
             wait(stamp)
             if clock_pub is not None:
-                clock_pub.publish_raw(_CLOCK.pack(*divmod(stamp, 1_000_000_000)))
+                if self.clock_per_message:
+                    clock_pub.publish_raw(self._clock_message(stamp))
+                else:
+                    self._tick_clock(time.perf_counter())  # behind schedule, _wait returns before ticking
             plan.publisher.publish_raw(payload)
             published += 1
         self.result.published += published
@@ -353,7 +377,7 @@ class Player:
         publisher = self._clock_pub
         if publisher is None or not self._started or now < self._next_tick:
             return
-        publisher.publish_raw(_CLOCK.pack(*divmod(self.clock.bag_time(now), 1_000_000_000)))
+        publisher.publish_raw(self._clock_message(self.clock.bag_time(now)))
         period = 1.0 / self.options.hz
         self._next_tick += period
         if self._next_tick <= now:  # fell behind (paused terminal, slow subscriber): no burst

@@ -1,28 +1,49 @@
-"""`bag play` into a ROS 2 graph: ROS 2 bags' CDR bytes are written to DDS as stored.
+"""`bag play` into a ROS 2 graph: every message is written to DDS as CDR bytes with a ROS 2 type name.
 
-The schedule, keys and status line are `play.Player`'s; only advertising differs. Each topic gets a DDS
-writer with the bag's type name (definitions a bag brings are registered first, so types outside the
-distro store play too) and transient_local durability where the recording publisher offered it. ROS 1
-bags are not converted to ROS 2 (their topics are skipped), and --clock is a ROS 1 option here.
+The schedule, keys and status line are `play.Player`'s; only advertising and the bytes differ. Each topic
+gets a DDS writer, transient_local where the recording publisher latched (ROS 1) or offered it (ROS 2).
+
+- ROS 2 bags: the stored CDR bytes as they are, with the bag's type name (definitions a bag brings are
+  registered first, so types outside the distro store play too).
+- ROS 1 bags: converted as `bag convert` does (rosbags' `ros1_to_cdr`, its static renames such as
+  tf/tfMessage -> tf2_msgs/msg/TFMessage, ROS 2's std_msgs/Header without `seq`). Types the distro store
+  lacks (rosgraph_msgs/Log, turtlesim/...) are registered as converted. The first message of a topic is
+  decoded with the graph's type; a type laid out differently in ROS 2 is skipped with a warning.
+- --clock publishes rosgraph_msgs/msg/Clock on /clock at --hz, as `ros2 bag play --clock HZ` does: the
+  playback clock's time, not each message's stamp. The writer is reliable, which best-effort readers
+  (rclcpp's ClockQoS) match too.
 """
 
 from __future__ import annotations
 
+import struct
+from functools import partial
 from typing import TYPE_CHECKING, Any, cast
 
-from rosbags.interfaces import ConnectionExtRosbag2
+from rosbags.interfaces import Connection, ConnectionExtRosbag1, ConnectionExtRosbag2
 
-from rostool.bag.play import Console, Player, PlayOptions, _Plan
+from rostool.bag.crossver import CrossVersionStores
+from rostool.bag.play import Console, Player, PlayOptions, RawPublisher, _Plan
+from rostool.bag.reader import describe
 from rostool.errors import RostoolError
 
 if TYPE_CHECKING:
     from collections.abc import Callable
 
+    from rosbags.typesys.store import Typestore
+
     from rostool.bag.reader import BagReader
     from rostool.graph.ros2.graph import Ros2Graph
 
+# Little-endian CDR encapsulation, then builtin_interfaces/Time (int32 sec, uint32 nanosec).
+_CDR_CLOCK = struct.Struct("<4siI")
+_CDR_LE = b"\x00\x01\x00\x00"
+
 
 class Ros2Player(Player):
+    graph_name = "ROS 2"
+    clock_per_message = False  # rosbag2 publishes /clock at its frequency only
+
     def __init__(
         self,
         reader: BagReader,
@@ -31,38 +52,62 @@ class Ros2Player(Player):
         console: Console | None = None,
         warn: Callable[[str], None] | None = None,
     ) -> None:
-        if options.clock:
-            raise RostoolError("--clock applies to ROS 1 graphs only in this rostool version")
-        # Player only touches the graph in advertise(), which this class replaces.
+        # Player only touches the graph in _plan() and _advertise_clock(), which this class replaces.
         super().__init__(reader, cast(Any, graph), options, console, warn)
         self.ros2 = graph
+        self._cdr_stores = CrossVersionStores(dst_version=2)
 
     def advertise(self) -> None:
-        """One DDS writer per topic; ROS 1 bags' topics are skipped."""
-        playable = [c for c in self.connections if isinstance(c.ext, ConnectionExtRosbag2)]
-        for conn in self.connections:
-            if conn not in playable:
-                self._skip(conn.topic, "ROS 1 bags play into ROS 1 graphs only", warn=False)
-        if not playable:
-            raise RostoolError(
-                "nothing to play in ROS 2: no ROS 2 bag topics selected (ROS 1 bags play into ROS 1 graphs "
-                "only: use --ros1)"
-            )
-        bag_types = self.reader.resolver.store.fielddefs
-        self.ros2.types.register(bag_types)  # only the types the distro store lacks are added
-        for conn in playable:
-            topic = self.options.remap.get(conn.topic, conn.topic)
-            existing = self._publishers.get(topic)
-            if existing is not None:
-                publisher, type_name = existing
-                if type_name != conn.msgtype:
-                    self._skip(conn.topic, f"a second type {conn.msgtype} on {topic}")
-                    continue
-            else:
-                ext = cast(ConnectionExtRosbag2, conn.ext)
-                latch = any(q.durability.value == 1 for q in ext.offered_qos_profiles)
-                publisher = self.ros2.publisher(topic, conn.msgtype, latch)
-                self._publishers[topic] = (publisher, conn.msgtype)
-            self._plans[id(conn)] = _Plan(topic, publisher, None)
-        for topic, why in self.result.skipped.items():
-            self.warn(f"skipping {topic}: {why}")
+        if self.reader.ros_version == 2:
+            self.ros2.types.register(self.reader.resolver.store.fielddefs)  # only what the distro lacks
+        super().advertise()
+
+    def _plan(self, conn: Connection) -> None:
+        """One DDS writer per topic; ROS 1 messages are converted, the first one checked."""
+        topic = self.options.remap.get(conn.topic, conn.topic)
+        try:
+            type_name, convert, latch = self._ros2_type_of(conn)
+        except RostoolError as err:
+            self._skip(conn.topic, str(err), warn=False)
+            return
+        existing = self._publishers.get(topic)
+        if existing is not None:
+            publisher, known_type = existing
+            if known_type != type_name:
+                self._skip(conn.topic, f"a second type {type_name} on {topic}", warn=False)
+                return
+        else:
+            publisher = self.ros2.publisher(topic, type_name, latch)
+            self._publishers[topic] = (publisher, type_name)
+        verify = None if convert is None else partial(self.ros2.types.deserialize, store_name=type_name)
+        self._plans[id(conn)] = _Plan(topic, publisher, convert, verify)
+
+    def _ros2_type_of(self, conn: Connection) -> tuple[str, Callable[[Any], Any] | None, bool]:
+        """(ROS 2 type name, ROS 1 -> CDR conversion or None, latched) of a bag connection."""
+        if isinstance(conn.ext, ConnectionExtRosbag2):
+            latch = any(q.durability.value == 1 for q in conn.ext.offered_qos_profiles)
+            return conn.msgtype, None, latch
+        from rosbags.convert.converter import STATIC_MSGTYPE_RENAMES
+
+        ext = cast(ConnectionExtRosbag1, conn.ext)
+        type_name = STATIC_MSGTYPE_RENAMES.get(conn.msgtype, conn.msgtype)
+        store = self._converted_store(conn.msgtype, type_name)
+        return type_name, partial(store.ros1_to_cdr, typename=type_name), bool(ext.latching)
+
+    def _converted_store(self, ros1_type: str, type_name: str) -> Typestore:
+        """The bag's ROS 1 types as ROS 2 types (as `bag convert` makes them), registered with the graph."""
+        resolver = self.reader.resolver
+        if ros1_type in resolver.unknown:
+            raise RostoolError(resolver.missing_message(ros1_type))
+        try:
+            store = self._cdr_stores.store_for(resolver.store, ros1_type, type_name)
+            self.ros2.types.register(store.fielddefs)  # only the types the distro store lacks
+        except Exception as err:  # a definition rosbags cannot express in ROS 2
+            raise RostoolError(f"{ros1_type} cannot be converted to ROS 2: {describe(err)}") from err
+        return store
+
+    def _advertise_clock(self) -> RawPublisher:
+        return self.ros2.publisher("/clock", "rosgraph_msgs/msg/Clock")
+
+    def _clock_message(self, stamp: int) -> bytes:
+        return _CDR_CLOCK.pack(_CDR_LE, *divmod(stamp, 1_000_000_000))

@@ -26,7 +26,7 @@ from pathlib import Path
 from types import FrameType
 from typing import Any, Literal, Protocol
 
-from rostool.bag.crossver import CrossVersionStores, ros2_store
+from rostool.bag.crossver import CrossVersionStores
 from rostool.bag.ros1_writer import BagWriter, WriteFailed
 from rostool.bag.sources import RecordSource
 from rostool.errors import RostoolError
@@ -222,6 +222,7 @@ class Ros2Sink:
         self.active = active_name(final)
         self.fmt = fmt
         self.source = source
+        self._stores = CrossVersionStores(2)
         if force and self.active.is_dir():
             shutil.rmtree(self.active)
         plugin = StoragePlugin.MCAP if fmt == "mcap" else StoragePlugin.SQLITE3
@@ -273,7 +274,7 @@ class Ros2Sink:
                 header.get("type", ""), header.get("md5sum", "*"), header.get("message_definition")
             )
             msgtype = STATIC_MSGTYPE_RENAMES.get(msg_type.store_name, msg_type.store_name)
-            store = ros2_store(msg_type.store, msg_type.store_name, msgtype)
+            store = self._stores.store_for(msg_type.store, msg_type.store_name, msgtype)
             conn = self.writer.add_connection(
                 header["topic"], msgtype, typestore=store, offered_qos_profiles=qos
             )
@@ -307,9 +308,6 @@ class Ros2Sink:
 
 def _unchanged(payload: bytes) -> bytes:
     return payload
-
-
-_ros2_store = ros2_store  # the name play_ros2 imported before crossver existed
 
 
 # -- the queue between network threads and the writer --------------------------------------------

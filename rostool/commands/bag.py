@@ -316,8 +316,8 @@ def reindex(files: tuple[str, ...]) -> None:
     "--topics", multiple=True, metavar="T", help="Only these topics (repeatable, or comma-separated)."
 )
 @click.option("--clock", is_flag=True, help="Publish the bag time on /clock (rosgraph_msgs/Clock).")
-@click.option("--hz", type=click.FloatRange(min=0, min_open=True), default=100.0, show_default=True,
-              help="Rate of /clock messages with --clock.")  # fmt: skip
+@click.option("--hz", type=click.FloatRange(min=0, min_open=True), metavar="HZ",
+              help="/clock messages per second (default 100; ROS 2: 40, as rosbag2).")  # fmt: skip
 @click.option("-d", "--delay", type=click.FloatRange(min=0), default=0.2, show_default=True, metavar="S",
               help="Wait S seconds after advertising, so subscribers can connect.")  # fmt: skip
 @click.option("--wait-for-subscribers", is_flag=True, help="Wait for a subscriber on every topic first.")
@@ -337,7 +337,7 @@ def play(
     duration: float | None,
     topics: tuple[str, ...],
     clock: bool,
-    hz: float,
+    hz: float | None,
     delay: float,
     wait_for_subscribers: bool,
     pause: bool,
@@ -352,7 +352,8 @@ def play(
     ROS 1 bags are published byte for byte with their stored types (latched where recorded so). ROS 2
     bags (.mcap, .db3, rosbag2 directories) are converted to ROS 1 (`pkg/msg/T` -> `pkg/T`); topics whose
     type has no ROS 1 equivalent are skipped with a warning. Into a ROS 2 graph (--ros2), ROS 2 bags'
-    CDR bytes are published unchanged with the bag's type names (transient_local where recorded so).
+    CDR bytes are published unchanged with the bag's type names (transient_local where recorded so), and
+    ROS 1 bags are converted as `bag convert` does.
     On a terminal, a status line shows the bag time and space pauses/resumes ('s' steps while paused).
     Remappings may also be given as arguments (`/chatter:=/talk`), and with --topics, further topic
     names after the bags.
@@ -363,7 +364,7 @@ def play(
       rostool bag play -r 2 -s 10 -u 5 run.bag --topics /odom,/tf
       rostool bag play -l --clock run.bag /scan:=/scan_raw
       rostool bag play talker.mcap
-      rostool --ros2 bag play talker.mcap
+      rostool --ros2 bag play talker.mcap --clock
     """
     from rostool.bag.play import Console, Player, PlayOptions, parse_remaps
     from rostool.bag.reader import BagReader
@@ -378,7 +379,7 @@ def play(
         loop=loop,
         topics=[*_topic_list(topics), *extra_topics],
         clock=clock,
-        hz=hz,
+        hz=hz if hz is not None else (40.0 if ros2 else 100.0),
         delay=delay,
         remap=parse_remaps([*remap_args, *remap]),
         keep_alive=keep_alive,

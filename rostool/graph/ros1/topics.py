@@ -244,4 +244,3 @@ class Subscription:
             for link in self._links.values():
                 link.close()
             self._links.clear()
-
