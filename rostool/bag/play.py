@@ -74,6 +74,17 @@ class RawPublisher(Protocol):
 
 
 @dataclass
+class _Kind:
+    """How one bag connection's messages go out: what identifies the type on a topic, and how."""
+
+    key: str  # two connections may share a topic only with the same key (md5sum, or ROS 2 type name)
+    label: str  # the type, for messages
+    advertise: Callable[[str], RawPublisher]  # topic -> publisher
+    convert: Callable[[Any], Any] | None = None
+    verify: Callable[[Any], object] | None = None
+
+
+@dataclass
 class _Plan:
     topic: str  # where it is published (after remapping)
     publisher: RawPublisher
@@ -222,21 +233,30 @@ class Player:
         """Plan how `conn`'s messages are published, or skip its topic."""
         topic = self.options.remap.get(conn.topic, conn.topic)
         try:
-            msg_type, convert, latch = self._type_of(conn)
+            kind = self._kind_of(conn)
         except RostoolError as err:
             self._skip(conn.topic, str(err), warn=False)
             return
         existing = self._publishers.get(topic)
         if existing is not None:
-            publisher, md5 = existing
-            if md5 != msg_type.md5sum:
-                self._skip(conn.topic, f"a second type {msg_type.name} on {topic}", warn=False)
+            publisher, key = existing
+            if key != kind.key:
+                self._skip(conn.topic, f"a second type {kind.label} on {topic}", warn=False)
                 return
         else:
-            publisher = self.graph.node.advertise(topic, msg_type, latch)
-            self._publishers[topic] = (publisher, msg_type.md5sum)
-        verify = None if convert is None else msg_type.deserialize
-        self._plans[id(conn)] = _Plan(topic, publisher, convert, verify)
+            publisher = kind.advertise(topic)
+            self._publishers[topic] = (publisher, kind.key)
+        self._plans[id(conn)] = _Plan(topic, publisher, kind.convert, kind.verify)
+
+    def _kind_of(self, conn: Connection) -> _Kind:
+        msg_type, convert, latch = self._type_of(conn)
+        return _Kind(
+            key=msg_type.md5sum,
+            label=msg_type.name,
+            advertise=lambda topic: self.graph.node.advertise(topic, msg_type, latch),
+            convert=convert,
+            verify=None if convert is None else msg_type.deserialize,
+        )
 
     def _advertise_clock(self) -> RawPublisher:
         publisher: Publisher = self.graph.node.advertise("/clock", self.types.builtin("rosgraph_msgs/Clock"))

@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING, Any, cast
 from rosbags.interfaces import Connection, ConnectionExtRosbag1, ConnectionExtRosbag2
 
 from rostool.bag.crossver import CrossVersionStores
-from rostool.bag.play import Console, Player, PlayOptions, RawPublisher, _Plan
+from rostool.bag.play import Console, Player, PlayOptions, RawPublisher, _Kind
 from rostool.bag.reader import describe
 from rostool.errors import RostoolError
 
@@ -62,25 +62,16 @@ class Ros2Player(Player):
             self.ros2.types.register(self.reader.resolver.store.fielddefs)  # only what the distro lacks
         super().advertise()
 
-    def _plan(self, conn: Connection) -> None:
+    def _kind_of(self, conn: Connection) -> _Kind:
         """One DDS writer per topic; ROS 1 messages are converted, the first one checked."""
-        topic = self.options.remap.get(conn.topic, conn.topic)
-        try:
-            type_name, convert, latch = self._ros2_type_of(conn)
-        except RostoolError as err:
-            self._skip(conn.topic, str(err), warn=False)
-            return
-        existing = self._publishers.get(topic)
-        if existing is not None:
-            publisher, known_type = existing
-            if known_type != type_name:
-                self._skip(conn.topic, f"a second type {type_name} on {topic}", warn=False)
-                return
-        else:
-            publisher = self.ros2.publisher(topic, type_name, latch)
-            self._publishers[topic] = (publisher, type_name)
-        verify = None if convert is None else partial(self.ros2.types.deserialize, store_name=type_name)
-        self._plans[id(conn)] = _Plan(topic, publisher, convert, verify)
+        type_name, convert, latch = self._ros2_type_of(conn)
+        return _Kind(
+            key=type_name,
+            label=type_name,
+            advertise=lambda topic: self.ros2.publisher(topic, type_name, latch),
+            convert=convert,
+            verify=None if convert is None else partial(self.ros2.types.deserialize, store_name=type_name),
+        )
 
     def _ros2_type_of(self, conn: Connection) -> tuple[str, Callable[[Any], Any] | None, bool]:
         """(ROS 2 type name, ROS 1 -> CDR conversion or None, latched) of a bag connection."""

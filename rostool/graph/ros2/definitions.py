@@ -101,31 +101,27 @@ def default_values(text: str, origin: str = "") -> dict[str, Any]:
     return found
 
 
+def parts_of(text: str, store_names: Sequence[str], origin: str, layout: str) -> Typesdict:
+    """Each `---` section of .srv/.action text parsed as its own message, named in order."""
+    sections = split_sections(text)
+    if len(sections) != len(store_names):
+        raise InterfaceError(f"{origin}: {layout}; this one has {len(sections)} sections")
+    typs: Typesdict = {}
+    for store_name, body in zip(store_names, sections, strict=True):
+        typs.update(parse_message(body, store_name, origin))
+    return typs
+
+
 def service_types(srv_type: str, text: str, origin: str) -> Typesdict:
     """`pkg/srv/T_Request` and `_Response` from .srv text."""
-    sections = split_sections(text)
-    if len(sections) != 2:
-        raise InterfaceError(
-            f"{origin}: a .srv file has a request and a response separated by a --- line; "
-            f"this one has {len(sections)} sections"
-        )
-    typs: Typesdict = {}
-    for suffix, body in zip(_SERVICE_SUFFIXES, sections, strict=True):
-        typs.update(parse_message(body, srv_type + suffix, origin))
-    return typs
+    layout = "a .srv file has a request and a response separated by a --- line"
+    return parts_of(text, [srv_type + suffix for suffix in _SERVICE_SUFFIXES], origin, layout)
 
 
 def action_types(action_type: str, text: str, origin: str) -> Typesdict:
     """An action's goal, result and feedback from .action text, and the five types rosidl derives."""
-    sections = split_sections(text)
-    if len(sections) != 3:
-        raise InterfaceError(
-            f"{origin}: an .action file has goal, result and feedback separated by --- lines; "
-            f"this one has {len(sections)} sections"
-        )
-    typs: Typesdict = {}
-    for part, body in zip(ACTION_PARTS, sections, strict=True):
-        typs.update(parse_message(body, f"{action_type}_{part}", origin))
+    layout = "an .action file has goal, result and feedback separated by --- lines"
+    typs = parts_of(text, [f"{action_type}_{part}" for part in ACTION_PARTS], origin, layout)
 
     def member(name: str, type_name: str) -> tuple[str, Any]:
         return name, (Nodetype.NAME, type_name)
