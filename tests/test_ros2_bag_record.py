@@ -10,6 +10,7 @@ import json
 import time
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import pytest
 import yaml
@@ -70,6 +71,16 @@ def read_ros2(path: Path) -> tuple[dict[str, list[object]], dict[str, str], dict
     return messages, types, durability
 
 
+def foxglove_decoded(path: Path) -> list[tuple[str, str, Any]]:
+    """(topic, schema name, message) of an .mcap as mcap-ros2-support decodes it from the stored schemas."""
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
+
+    with path.open("rb") as stream:
+        reader = make_reader(stream, decoder_factories=[DecoderFactory()])
+        return [(c.topic, s.name, m) for s, c, _raw, m in reader.iter_decoded_messages()]
+
+
 @pytest.mark.parametrize("suffix", ["mcap", "db3"])
 def test_record_all_into_ros2_bags(
     env: dict[str, str], publishers: None, tmp_path: Path, suffix: str
@@ -91,6 +102,12 @@ def test_record_all_into_ros2_bags(
     # the latched message arrives although it was published before recording started
     assert [m.data for m in messages["/mode"]] == ["auto"]  # type: ignore[attr-defined]
     assert durability["/mode"] == 1 and durability["/chatter"] == 0  # TRANSIENT_LOCAL is 1 in rosbags
+    if suffix == "mcap":  # a second, independent reader: Foxglove's decoder, from the schemas in the file
+        decoded = foxglove_decoded(out)
+        assert len(decoded) == sum(len(v) for v in messages.values())
+        poses = [msg for topic, _schema, msg in decoded if topic == "/pose"]
+        assert poses[0].header.frame_id == "map" and poses[0].pose.position.x == 1.5
+        assert {schema for _topic, schema, _msg in decoded} == set(types.values())
 
 
 def test_default_name_is_a_dated_mcap(env: dict[str, str], publishers: None, tmp_path: Path) -> None:
@@ -199,7 +216,9 @@ def test_custom_types_from_sources_are_recorded_self_describing(tmp_path: Path) 
     assert "unknown message type 'robo_msgs/msg/Status'" in blind.stderr, blind.stderr
     assert "recorded 0 messages" in blind.stderr and "Traceback" not in blind.stderr
     assert recorded.returncode == 0, recorded.stderr
-    # the bag carries the definitions: reading it needs no --interfaces
+    # the bag carries the definitions: no --interfaces needed, by rostool or by Foxglove's decoder
+    first = foxglove_decoded(out)[0][2]
+    assert (first.name, first.parts[0].label, first.where.x) == ("r2", "arm", 1.0)
     echoed = rostool(["bag", "echo", str(out), "/status", "-n", "1", "--json"], ros2_env())
     assert json.loads(echoed.stdout) == {
         "name": "r2",
