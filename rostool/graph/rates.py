@@ -27,8 +27,8 @@ class RunningStats:
     def __init__(self, window: int | None = None) -> None:
         self._window: deque[float] | None = deque(maxlen=window) if window else None
         self._n = 0
-        self._sum = 0.0
-        self._sumsq = 0.0
+        self._mean = 0.0
+        self._m2 = 0.0  # Welford: sums of squares taken about the running mean stay exact for large values
         self._min = math.inf
         self._max = -math.inf
 
@@ -37,8 +37,9 @@ class RunningStats:
             self._window.append(value)
             return
         self._n += 1
-        self._sum += value
-        self._sumsq += value * value
+        delta = value - self._mean
+        self._mean += delta / self._n
+        self._m2 += delta * (value - self._mean)
         self._min = min(self._min, value)
         self._max = max(self._max, value)
 
@@ -52,9 +53,8 @@ class RunningStats:
             return Summary(len(values), mean, min(values), max(values), math.sqrt(var))
         if self._n == 0:
             return None
-        mean = self._sum / self._n
-        var = max(self._sumsq / self._n - mean * mean, 0.0)
-        return Summary(self._n, mean, self._min, self._max, math.sqrt(var))
+        var = max(self._m2 / self._n, 0.0)
+        return Summary(self._n, self._mean, self._min, self._max, math.sqrt(var))
 
 
 class RateMeter:
