@@ -11,6 +11,7 @@ import os
 import random
 import subprocess
 import sys
+import time
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -145,6 +146,28 @@ def test_qos_adapts_to_best_effort_and_transient_local(env: dict[str, str]) -> N
     finally:
         stop(best_effort)
         stop(latched)
+
+
+def test_echo_follows_the_publishers_qos_as_they_change(env: dict[str, str]) -> None:
+    """ros2 topic echo picks its QoS once; rostool's echo subscribes again when a publisher it cannot
+    match appears (and the user left the QoS to it), so every publisher below is heard."""
+    echo = rostool_popen(["topic", "echo", "/y"], env)
+    volatile = rostool_popen(["topic", "echo", "/y", "--qos-durability", "volatile"], env)
+    try:
+        time.sleep(1.0)
+        # latched (transient_local): echo adapts to it; the volatile echo still gets it, because a
+        # finite publication waits for the subscribers discovery shows before publishing
+        assert rostool(["topic", "pub", "/y", "std_msgs/String", "data: b", "-1"], env).returncode == 0
+        for data, extra in (("c", []), ("e", ["--qos-reliability", "best_effort"])):
+            sent = rostool(["topic", "pub", "/y", "std_msgs/String", f"data: {data}", "-r", "5", "-n", "2",
+                            *extra], env)  # fmt: skip
+            assert sent.returncode == 0, sent.stderr
+        time.sleep(0.5)
+    finally:
+        out, err = stop(echo)
+        out_volatile, _err = stop(volatile)
+    assert yaml_docs(out) == ["data: b", "data: c", "data: c", "data: e", "data: e"], err
+    assert yaml_docs(out_volatile)[0] == "data: b"
 
 
 # Publishes every message of a bag as its stored CDR bytes, once every topic has its subscribers.

@@ -88,6 +88,7 @@ class Ros2Source:
         self.types = graph.types
         self.store = graph.types.store
         self.warn = warn
+        graph.warn = warn  # the subscriptions' warnings (incompatible QoS) go to the same place
 
     def resolve(self, name: str) -> str:
         return self.graph.resolve(name)

@@ -14,6 +14,7 @@ from rostool.graph.base import Graph
 from rostool.interfaces.values import message_args
 
 ONCE_LATCH_SECONDS = 3.0
+MATCH_WAIT_SECONDS = 3.0  # ROS 2: how long a finite publication waits for the subscribers discovered
 
 
 def _file_messages(path: str) -> list[Any]:
@@ -43,11 +44,16 @@ def publish_loop(
     messages = [graph.build_message(type_name, value) for value in raw]
     latched = latch or rate is None
     publisher = graph.publisher(topic, type_name, latch=latched)
+    finite = rate is None or once or count is not None or file is not None
+    if graph.ros_version == 2 and finite:
+        # A volatile ROS 2 subscriber gets nothing published before it matched (latching only serves
+        # transient_local ones), so wait for the subscribers discovery shows, as ros2 topic pub -1 does.
+        _wait_for_known_subscribers(graph, publisher, MATCH_WAIT_SECONDS)
     if rate is None and not file:
         publisher.publish(messages[0])
         if once:
             say(f"publishing and latching message for {ONCE_LATCH_SECONDS:.1f} seconds")
-            _linger(graph, topic, publisher, ONCE_LATCH_SECONDS)
+            _linger(graph, publisher, ONCE_LATCH_SECONDS)
             return
         say("publishing and latching message. Press ctrl-C to terminate")
         while True:
@@ -68,12 +74,20 @@ def publish_loop(
         publisher.publish(messages[sent % len(messages)])
         sent += 1
     if latched or once:
-        _linger(graph, topic, publisher, min(ONCE_LATCH_SECONDS, 1.0))
+        _linger(graph, publisher, min(ONCE_LATCH_SECONDS, 1.0))
 
 
-def _linger(graph: Graph, topic: str, publisher: Any, seconds: float) -> None:
-    """Stay up until every subscriber the master knows has connected (at most `seconds`)."""
+def _linger(graph: Graph, publisher: Any, seconds: float) -> None:
+    """Stay up until every subscriber the graph knows has connected (at most `seconds`)."""
     deadline = time.monotonic() + seconds
-    wanted = len(next((t.subscribers for t in graph.topics() if t.name == publisher.topic), []))
-    publisher.wait_for_subscribers(wanted, max(0.0, deadline - time.monotonic()))
+    _wait_for_known_subscribers(graph, publisher, seconds)
     time.sleep(max(0.0, deadline - time.monotonic()))
+
+
+def _wait_for_known_subscribers(graph: Graph, publisher: Any, seconds: float) -> None:
+    deadline = time.monotonic() + seconds
+    try:
+        wanted = len(next((t.subscribers for t in graph.topics() if t.name == publisher.topic), []))
+    except RostoolError:  # nobody else in the graph (ROS 2: no participant answered)
+        return
+    publisher.wait_for_subscribers(wanted, max(0.0, deadline - time.monotonic()))

@@ -111,6 +111,14 @@ class QosProfile:
         return f"{self.reliability or default}, {self.durability or default}, depth {self.depth}"
 
 
+def serves(writer: QosProfile, reader: QosProfile) -> bool:
+    """DDS's request/offer rule for the policies rostool sets; unset policies are DDS's defaults
+    (writers reliable, readers best effort, both volatile)."""
+    if reader.reliability == "reliable" and (writer.reliability or "reliable") != "reliable":
+        return False
+    return not (reader.durability == "transient_local" and writer.durability != "transient_local")
+
+
 # rmw's presets (rmw/qos_profiles.h), by ros2cli's short keys.
 PROFILES: dict[str, QosProfile] = {
     "default": QosProfile("reliable", "volatile", 10),

@@ -121,6 +121,15 @@ class Session:
             self.announce()
         return reader
 
+    def drop_reader(self, reader: Any) -> None:
+        """Delete a reader this session made and stop announcing it."""
+        with self._lock:
+            guid = reader.guid.bytes
+            if guid in self.node.readers:
+                self.node.readers.remove(guid)
+                self.announce()
+        reader.__del__()  # cyclonedds deletes an entity only this way (or with its participant)
+
     def close(self) -> None:
         self.participant.close()
 
@@ -523,6 +532,13 @@ class _Subscription:
         return None
 
     def _read(self, store_name: str, profile: dds.QosProfile) -> None:
+        """Read until closed; when a publisher appears that the reader cannot match and the user left the
+        QoS to rostool, subscribe again with the QoS adapted to all the publishers now known."""
+        next_profile: dds.QosProfile | None = profile
+        while next_profile is not None and not self._closed.is_set():
+            next_profile = self._read_with(store_name, next_profile)
+
+    def _read_with(self, store_name: str, profile: dds.QosProfile) -> dds.QosProfile | None:
         from cyclonedds._clayer import ddspy_take  # type: ignore[import-not-found]
         from cyclonedds.core import ReadCondition, WaitSet
         from cyclonedds.util import duration
@@ -561,13 +577,37 @@ class _Subscription:
                 status = reader.get_requested_incompatible_qos_status()
                 if status.total_count > reported:
                     reported = status.total_count
-                    self._on_error(self._incompatible(status.last_policy_id, profile))
+                    adapted = self._readapted(profile)
+                    if adapted is not None:
+                        graph.session.drop_reader(reader)
+                        return adapted
+                    self._report_incompatible(status.last_policy_id, profile)
+        return None
 
-    def _incompatible(self, policy_id: int, profile: dds.QosProfile) -> str:
+    def _readapted(self, profile: dds.QosProfile) -> dds.QosProfile | None:
+        """The QoS that serves every publisher now known, when it differs from `profile`."""
+        offered = [w.qos for w in self._publishers() if w.is_writer]
+        if not offered:
+            return None
+        adapted, notes = dds.adapt_to_publishers(self._graph.qos_request, offered)
+        if adapted.reliability == profile.reliability and adapted.durability == profile.durability:
+            return None  # the user's own --qos-* choice, or nothing better to do
+        for note in notes:
+            self._graph.warn(note)
+        return adapted
+
+    def _report_incompatible(self, policy_id: int, profile: dds.QosProfile) -> None:
+        """Fatal when no known publisher can serve this reader; otherwise a warning, as ros2 topic echo
+        gives, and the compatible publishers keep being read."""
         policy = dds.POLICY_NAMES.get(policy_id, f"policy {policy_id}")
-        offered = sorted({w.qos.describe() for w in self._publishers() if w.is_writer})
-        return (
+        offered = [w.qos for w in self._publishers() if w.is_writer]
+        described = sorted({qos.describe() for qos in offered})
+        offers = f"; publishers offer {'; '.join(described)}" if described else ""
+        text = (
             f"a publisher of {self._topic} offers QoS incompatible with this subscription "
-            f"({profile.describe()}): incompatible policy {policy}; publishers offer "
-            f"{'; '.join(offered) or 'unknown'} (adjust --qos-reliability / --qos-durability)"
+            f"({profile.describe()}): incompatible policy {policy}{offers}"
         )
+        if offered and not any(dds.serves(qos, profile) for qos in offered):
+            self._on_error(f"{text} (adjust --qos-reliability / --qos-durability)")
+        else:
+            self._graph.warn(f"{text}; no messages will be received from it")
