@@ -225,3 +225,21 @@ def test_custom_types_from_sources_are_recorded_self_describing(tmp_path: Path) 
         "parts": [{"label": "arm", "weight": 1.5}],
         "where": {"x": 1.0, "y": 0.0, "z": 0.0},
     }, echoed.stderr
+
+
+def test_hidden_topics_only_when_asked(env: dict[str, str], tmp_path: Path) -> None:
+    procs = [
+        rostool_popen(["topic", "pub", topic, "std_msgs/String", "data: x", "-r", "10"], env)
+        for topic in ("/visible", "/robot/_internal")
+    ]
+    try:
+        assert wait_until(lambda: len(rostool(["topic", "list"], env).stdout.split()) == 2, timeout=20)
+        plain = rostool(["bag", "record", "-a", "-O", str(tmp_path / "plain.mcap"), "--duration", "1.5"], env)
+        hidden = rostool(["bag", "record", "-a", "--include-hidden-topics", "-O", str(tmp_path / "all.mcap"),
+                          "--duration", "1.5"], env)  # fmt: skip
+    finally:
+        for proc in procs:
+            stop(proc)
+    assert plain.returncode == 0 and hidden.returncode == 0, plain.stderr + hidden.stderr
+    assert set(read_ros2(tmp_path / "plain.mcap")[1]) == {"/visible"}
+    assert set(read_ros2(tmp_path / "all.mcap")[1]) == {"/visible", "/robot/_internal"}

@@ -83,8 +83,9 @@ class Ros2Source:
 
     encoding: Encoding = "cdr"
 
-    def __init__(self, graph: Ros2Graph, warn: Callable[[str], None]) -> None:
+    def __init__(self, graph: Ros2Graph, warn: Callable[[str], None], include_hidden: bool = False) -> None:
         self.graph = graph
+        self.include_hidden = include_hidden
         self.types = graph.types
         self.store = graph.types.store
         self.warn = warn
@@ -94,16 +95,13 @@ class Ros2Source:
         return self.graph.resolve(name)
 
     def published_topics(self) -> list[str]:
-        """Topics with a publisher; hidden ones (a name part starting with `_`) are left out, as
-        `ros2 bag record -a` does."""
+        """Topics with a publisher; hidden ones (a name part starting with `_`) are left out unless asked
+        for, as `ros2 bag record -a` does."""
         cache = self.graph.session.cache
         cache.poll()
-        found = set()
-        for endpoint in cache.remote_endpoints():
-            ros = endpoint.ros
-            if endpoint.is_writer and ros is not None and ros[0] == "topic" and not _hidden(ros[1]):
-                found.add(ros[1])
-        return sorted(found)
+        writers = [e.ros for e in cache.remote_endpoints() if e.is_writer]
+        published = {ros[1] for ros in writers if ros is not None and ros[0] == "topic"}
+        return sorted(t for t in published if self.include_hidden or not _hidden(t))
 
     def subscribe(self, topic: str, put: Put) -> None:
         def on_message(received: Received) -> None:

@@ -446,7 +446,7 @@ def _ros1(graph: object) -> Ros1Graph:
     return graph
 
 
-def _record_source(graph: object, progress: _RecordProgress | None) -> RecordSource:
+def _record_source(graph: object, progress: _RecordProgress | None, include_hidden: bool) -> RecordSource:
     from rostool.bag.sources import Ros1Source, Ros2Source
     from rostool.graph.ros2.graph import Ros2Graph
 
@@ -457,7 +457,9 @@ def _record_source(graph: object, progress: _RecordProgress | None) -> RecordSou
                 progress.end()
             click.echo(f"rostool: warning: {text}", err=True)
 
-        return Ros2Source(graph, warn)
+        return Ros2Source(graph, warn, include_hidden)
+    if include_hidden:
+        raise RostoolError("--include-hidden-topics applies to ROS 2 graphs only (ROS 1 hides no topics)")
     return Ros1Source(_ros1(graph))
 
 
@@ -496,6 +498,7 @@ def _parse_duration(text: str | None) -> float | None:
 @click.option("-j", "--bz2", "compression", flag_value="bz2", help="Compress .bag chunks with bz2.")
 @click.option("-q", "--quiet", is_flag=True, help="No progress and no summary on stderr.")
 @click.option("--force", is_flag=True, help="Overwrite an existing output file.")
+@click.option("--include-hidden-topics", is_flag=True, help="ROS 2: -a/-e also record hidden topics (/_x).")
 @interfaces_option
 @qos_options
 @click.pass_context
@@ -515,6 +518,7 @@ def record(
     compression: str | None,
     quiet: bool,
     force: bool,
+    include_hidden_topics: bool,
     interface_paths: tuple[str, ...],
     qos: QosRequest,
 ) -> None:
@@ -569,7 +573,7 @@ def record(
     stop = threading.Event()
     with live_graph(ctx, interface_paths) as graph:
         use_qos(graph, qos)
-        recorder = Recorder(_record_source(graph, progress), options)
+        recorder = Recorder(_record_source(graph, progress, include_hidden_topics), options)
         with stop_on_signals(stop):
             try:
                 result = recorder.run(stop, progress)
