@@ -137,16 +137,27 @@ def _info_ros2(ctx: click.Context, name: str, as_json: bool) -> None:
 @click.argument("type_name", metavar="TYPE")
 @click.option("-r", "--raw", is_flag=True, help="Print the .action text as written, comments included.")
 @interfaces_option
-def show(type_name: str, raw: bool, interface_paths: tuple[str, ...]) -> None:
+@click.pass_context
+def show(ctx: click.Context, type_name: str, raw: bool, interface_paths: tuple[str, ...]) -> None:
     """Print the goal, result and feedback fields of an action type.
+
+    On ROS 2 (--ros2, ROS_VERSION=2 or a pkg/action/Type name) it prints what `ros2 interface show
+    --no-comments` does.
 
     \b
     Examples:
       rostool action show robot_navigation_pkg/MoveToPoint --interfaces ~/catkin_ws
       rostool action show actionlib/TwoInts
+      rostool --ros2 action show example_interfaces/action/Fibonacci
     """
+    from rostool.commands._common import ros_version
     from rostool.interfaces.action import load_action
+    from rostool.interfaces.describe_ros2 import ros2_selected, show_text
     from rostool.interfaces.sources import interfaces
+
+    if ros2_selected(ros_version(ctx), type_name):
+        click.echo(show_text(type_name, "action", interface_paths, raw), nl=False)
+        return
 
     catalog = interfaces(interface_paths)
     found = load_action(catalog, type_name)
