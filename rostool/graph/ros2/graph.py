@@ -4,6 +4,9 @@ The DDS participant starts on first need. It announces one node, `/rostool_<pid>
 (so ROS 2 tools list it like any node) with the readers and writers it creates. Samples are moved as raw
 CDR bytes (`ddspy_write` / `ddspy_take`, the calls cyclonedds' own DataWriter/DataReader make after
 serializing), so what goes out and what comes in is exactly rosbags' CDR, byte for byte.
+
+A process that publishes also serves `<node>/get_type_description` (REP 2016), and a subscription to a type
+rostool does not know asks the publisher's node for it (type_description.py).
 """
 
 from __future__ import annotations
@@ -33,9 +36,11 @@ from rostool.graph.ros2.types import TypeSupport, distro_from_env, gid_size
 
 if TYPE_CHECKING:
     from rostool.graph.ros2.services import ServiceClient
+    from rostool.graph.ros2.type_description import TypeDescriptionServer
 
 SETTLE_MAX_SECONDS = 3.0  # listing verbs: how long an empty graph is given before "no participants"
 TOPIC_WAIT_SECONDS = 1.5
+NODE_WAIT_SECONDS = 1.0  # unknown types: how long to wait for the publishers' nodes to be announced
 READER_CACHE_DEPTH = 1000  # echo/hz/pub: how long to look for a topic before warning it is not there yet
 _ANY_SAMPLE = 0x7F  # SampleState.Any | ViewState.Any | InstanceState.Any (DDS mask bits)
 
@@ -121,6 +126,20 @@ class Session:
             self.announce()
         return reader
 
+    def used_types(self) -> set[str]:
+        """The message types of this session's topics (service topics give their request/reply types)."""
+        with self._lock:
+            return {store_name for _topic, store_name in self._topics.values()}
+
+    def drop_writer(self, writer: Any) -> None:
+        """Delete a writer this session made and stop announcing it."""
+        with self._lock:
+            guid = writer.guid.bytes
+            if guid in self.node.writers:
+                self.node.writers.remove(guid)
+                self.announce()
+        writer.__del__()  # as drop_reader
+
     def drop_reader(self, reader: Any) -> None:
         """Delete a reader this session made and stop announcing it."""
         with self._lock:
@@ -158,6 +177,8 @@ class Ros2Graph:
         self._session: Session | None = None
         self._lock = threading.Lock()
         self._subscriptions: list[_Subscription] = []
+        self._type_server: TypeDescriptionServer | None = None
+        self._learn_lock = threading.Lock()  # one fetch per type when several subscriptions meet it
 
     @property
     def session(self) -> Session:
@@ -180,6 +201,9 @@ class Ros2Graph:
         for sub in self._subscriptions:
             sub.close()
         self._subscriptions.clear()
+        if self._type_server is not None:
+            self._type_server.close()
+            self._type_server = None
         if self._session is not None:
             self._session.close()
             self._session = None
@@ -314,7 +338,49 @@ class Ros2Graph:
             base = dds.QosProfile(base.reliability, "transient_local", base.depth)
         profile = request.apply(base)
         writer = self.session.writer(topic_to_dds(resolved), store_name, profile)
+        self._serve_type_descriptions()
         return _Publisher(resolved, store_name, writer, self.types)
+
+    def _serve_type_descriptions(self) -> None:
+        """Publishing processes answer `<node>/get_type_description` as Iron+ nodes do, so subscribers
+        without our interface sources can still decode what we publish."""
+        from rostool.graph.ros2 import type_description
+
+        with self._lock:
+            if self._type_server is not None or not type_description.available(self.types):
+                return
+        server = type_description.TypeDescriptionServer(self.session, self.node_name)
+        with self._lock:
+            if self._type_server is None:
+                self._type_server = server
+                return
+        server.close()  # another thread started one first
+
+    def learn_type(self, type_name: str, publishers: Sequence[Endpoint]) -> None:
+        """Make an unknown topic type known from its publishers' type description services, or raise the
+        unknown-type error saying why that failed."""
+        from rostool.graph.ros2 import type_description
+
+        with self._learn_lock:
+            if self.types.knows(type_name):
+                return
+            if type_description.available(self.types):
+                owners = self.session.cache.node_of()
+                asked = [
+                    (owners[e.guid], e.type_hash)
+                    for e in publishers
+                    if e.guid in owners and e.type_name == type_name
+                ]
+                why = type_description.fetch_types(self.session, type_name, asked)
+                if why is None:
+                    return
+            else:
+                why = f"type descriptions exist from Iron on, and the distro is {self.types.distro}"
+            try:
+                self.types.store_name(type_name)
+            except RostoolError as err:
+                text = f"{err}. The publisher did not provide its type description ({why})"
+                raise RostoolError(text) from None
 
     # --- services -----------------------------------------------------------------------------
     def services(self) -> list[tuple[str, str, list[str]]]:
@@ -512,6 +578,18 @@ class _Subscription:
         cache.poll()
         return [e for e in cache.remote_endpoints() if e.ros == ("topic", self._topic)]
 
+    def _described_publishers(self, writers: list[Endpoint]) -> list[Endpoint]:
+        """The writers, once their nodes are known: ros_discovery_info may come a moment after them."""
+        cache = self._graph.session.cache
+        deadline = time.monotonic() + NODE_WAIT_SECONDS
+        while writers and not self._closed.is_set() and time.monotonic() < deadline:
+            owners = cache.node_of()
+            if all(w.guid in owners for w in writers):
+                break
+            self._closed.wait(0.05)
+            cache.poll()
+        return writers
+
     def _wait_for_type(self) -> tuple[str, dds.QosProfile] | None:
         graph = self._graph
         cache = graph.session.cache
@@ -523,7 +601,7 @@ class _Subscription:
             if known and (writers or settled):
                 type_name = known[0].type_name
                 if not graph.types.knows(type_name):
-                    graph.types.store_name(type_name)  # raises the "unknown type" error
+                    graph.learn_type(type_name, self._described_publishers(writers))
                 profile, notes = dds.adapt_to_publishers(graph.qos_request, [w.qos for w in writers])
                 for note in notes:
                     graph.warn(note)

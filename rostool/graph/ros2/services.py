@@ -50,6 +50,10 @@ SRV_DEFINITIONS: dict[str, str] = {
     "std_srvs/srv/Empty": "---\n",
     "std_srvs/srv/SetBool": "bool data\n---\nbool success\nstring message\n",
     "std_srvs/srv/Trigger": "---\nbool success\nstring message\n",
+    # REP 2016, served by every node from Iron on (see type_description.py)
+    "type_description_interfaces/srv/GetTypeDescription": "string type_name\nstring type_hash\n"
+    "bool include_type_sources true\n---\nbool successful\nstring failure_reason\n"
+    "TypeDescription type_description\nTypeSource[] type_sources\nKeyValue[] extra_information\n",
 }
 
 
@@ -96,6 +100,7 @@ class ServiceClient:
     """Calls one service; `call` waits until a server has matched both topics."""
 
     def __init__(self, session: Any, service: str, srv_type: str) -> None:
+        self._session = session
         self._types: TypeSupport = session.types
         self.service = service
         self.request_type, self.response_type = register_service(self._types, srv_type)
@@ -140,6 +145,11 @@ class ServiceClient:
                         return self._types.deserialize(cdr, self.response_type)
                 time.sleep(0.005)
         raise RostoolError(f"service {self.service} did not reply within {timeout:g} s")
+
+    def close(self) -> None:
+        """Delete this client's request writer and reply reader (a one-off call leaves nothing behind)."""
+        self._session.drop_writer(self._writer)
+        self._session.drop_reader(self._reader)
 
 
 class ServiceServer:
