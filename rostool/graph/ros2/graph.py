@@ -131,23 +131,15 @@ class Session:
         with self._lock:
             return {store_name for _topic, store_name in self._topics.values()}
 
-    def drop_writer(self, writer: Any) -> None:
-        """Delete a writer this session made and stop announcing it."""
+    def drop(self, endpoint: Any) -> None:
+        """Delete a reader or writer this session made and stop announcing it."""
         with self._lock:
-            guid = writer.guid.bytes
-            if guid in self.node.writers:
-                self.node.writers.remove(guid)
-                self.announce()
-        writer.__del__()  # as drop_reader
-
-    def drop_reader(self, reader: Any) -> None:
-        """Delete a reader this session made and stop announcing it."""
-        with self._lock:
-            guid = reader.guid.bytes
-            if guid in self.node.readers:
-                self.node.readers.remove(guid)
-                self.announce()
-        reader.__del__()  # cyclonedds deletes an entity only this way (or with its participant)
+            guid = endpoint.guid.bytes
+            for announced in (self.node.readers, self.node.writers):
+                if guid in announced:
+                    announced.remove(guid)
+                    self.announce()
+        endpoint.__del__()  # cyclonedds deletes an entity only this way (or with its participant)
 
     def close(self) -> None:
         self.participant.close()
@@ -657,7 +649,7 @@ class _Subscription:
                     reported = status.total_count
                     adapted = self._readapted(profile)
                     if adapted is not None:
-                        graph.session.drop_reader(reader)
+                        graph.session.drop(reader)
                         return adapted
                     self._report_incompatible(status.last_policy_id, profile)
         return None

@@ -148,8 +148,8 @@ class ServiceClient:
 
     def close(self) -> None:
         """Delete this client's request writer and reply reader (a one-off call leaves nothing behind)."""
-        self._session.drop_writer(self._writer)
-        self._session.drop_reader(self._reader)
+        self._session.drop(self._writer)
+        self._session.drop(self._reader)
 
 
 class ServiceServer:
