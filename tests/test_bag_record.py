@@ -401,3 +401,45 @@ def test_force_and_disk_full(debian_master: dict[str, str], tmp_path: Path) -> N
     counters = [int(v.split(":")[0]) for v in values]
     assert counters == list(range(counters[0], counters[0] + len(counters)))
     assert nodes_on(env, "/big") == []  # unsubscribed
+
+
+def test_limit_max_splits_and_node(debian_master: dict[str, str], tmp_path: Path) -> None:
+    """rosbag's --limit (ends by itself), --max-splits (oldest files deleted) and --node (the node's
+    subscriptions), checked with Debian's rosbag."""
+    env = debian_master
+    listener_script = (
+        "import rospy\nfrom std_msgs.msg import String\nrospy.init_node('listener')\n"
+        "rospy.Subscriber('hello_world', String, lambda m: None)\nrospy.spin()\n"
+    )
+    hello = start_rospy_script(HELLO_PUBLISHER, env, tmp_path, "hello")
+    listener = start_rospy_script(listener_script, env, tmp_path, "listener")
+    counter = start_rospy_script(COUNTER_PUBLISHER, env, tmp_path, "counter", ["/count", "50", "100000"])
+    try:
+        wait_published(env, "/hello_world")
+        wait_published(env, "/count")
+        wait_subscribed(env, "/hello_world")
+        limited = rostool(["bag", "record", "/count", "/hello_world", "-l", "3", "-O", "limited.bag"], env,
+                          cwd=tmp_path, timeout=20)  # fmt: skip
+        assert limited.returncode == 0, limited.stderr
+        info = debian_info(tmp_path / "limited.bag", env)
+        assert {t["topic"]: t["messages"] for t in info["topics"]} == {"/count": 3, "/hello_world": 3}
+
+        splitting = record(env, tmp_path, ["/count", "-O", "part.bag", "--split", "--duration", "0.4",
+                                           "--max-splits", "2"])  # fmt: skip
+        time.sleep(3.0)
+        _out, err = finish(splitting)
+        assert splitting.returncode == 0, err
+        parts = sorted(tmp_path.glob("part_*.bag"))
+        assert len(parts) == 2 and "--max-splits removed" in err, (parts, err)
+        assert parts[0].name != "part_0.bag"  # the oldest went first
+        for part in parts:
+            assert debian_info(part, env)["topics"][0]["topic"] == "/count"
+
+        node = rostool(["bag", "record", "--node", "/listener", "-O", "node.bag", "--duration", "1.5"], env,
+                       cwd=tmp_path)  # fmt: skip
+        assert node.returncode == 0, node.stderr
+        topics = {t["topic"] for t in debian_info(tmp_path / "node.bag", env)["topics"]}
+        assert topics == {"/hello_world"}  # what /listener subscribes to, not /count or /rosout
+    finally:
+        for proc in (counter, hello, listener):
+            stop(proc)

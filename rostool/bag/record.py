@@ -49,6 +49,9 @@ class RecordOptions:
     duration: float | None = None  # total, or per file with split
     size: int | None = None  # bytes: stop, or per file with split
     split: bool = False
+    max_splits: int | None = None  # with split: keep at most N files, deleting the oldest
+    limit: int | None = None  # record at most N messages per topic
+    node: str | None = None  # record the topics this node subscribes to (rosbag's --node)
     default_fmt: Format = "bag"  # without -O/-o suffix or --format
     buffer_bytes: int = 256 * 1024 * 1024
     compression: str = "none"
@@ -70,6 +73,7 @@ class RecordResult:
     counts: dict[str, int] = field(default_factory=dict)
     dropped: dict[str, int] = field(default_factory=dict)
     skipped: dict[str, str] = field(default_factory=dict)  # topic -> why some messages were not written
+    removed: list[Path] = field(default_factory=list)  # older split files deleted by --max-splits
     error: str | None = None
 
     @property
@@ -352,10 +356,12 @@ class _Queue:
 # -- the recorder --------------------------------------------------------------------------------
 class Recorder:
     def __init__(self, source: RecordSource, options: RecordOptions) -> None:
-        if not options.topics and not options.all_topics:
-            raise RostoolError("no topics to record: name them, or use -a (all) or -e REGEX")
+        if not options.topics and not options.all_topics and options.node is None:
+            raise RostoolError("no topics to record: name them, or use -a (all), -e REGEX or --node NODE")
         if options.split and options.size is None and options.duration is None:
             raise RostoolError("--split needs --size MB or --duration D")
+        if options.max_splits is not None and not options.split:
+            raise RostoolError("--max-splits needs --split")
         self.source = source
         self.options = options
         self.fmt = output_format(options)
@@ -399,6 +405,11 @@ class Recorder:
         assert self._split_index is not None
         self._split_index += 1
         self._sink = self._open_next()
+        keep = self.options.max_splits
+        while keep is not None and len(self.result.files) >= keep:  # the new file counts too, as rosbag
+            oldest = self.result.files.pop(0)
+            oldest.unlink(missing_ok=True)
+            self.result.removed.append(oldest)
 
     # -- subscribing -----------------------------------------------------------------------------
     def _wanted(self, topic: str) -> bool:
@@ -415,8 +426,14 @@ class Recorder:
         self.source.subscribe(topic, self.queue.put)
 
     def _discover(self) -> None:
-        for topic in self.source.published_topics():
-            if topic not in self._subscribed and self._wanted(topic):
+        node = self.options.node
+        if node is not None:
+            found = self.source.subscribed_topics(self.source.resolve(node))
+            wanted = [t for t in found if self.exclude is None or not self.exclude.fullmatch(t)]
+        else:
+            wanted = [t for t in self.source.published_topics() if self._wanted(t)]
+        for topic in wanted:
+            if topic not in self._subscribed:
                 self._subscribe(topic)
 
     # -- writer thread ---------------------------------------------------------------------------
@@ -454,6 +471,9 @@ class Recorder:
             known = self._headers[topic, origin] = (tuple(fields.values()), fields)
         key, fields = known
         options = self.options
+        counts = self.result.counts
+        if options.limit is not None and counts.get(topic, 0) >= options.limit:
+            return
         if options.split and options.duration is not None and self._file_start is not None:
             limit = int(options.duration * 1e9)
             if stamp - self._file_start > limit:
@@ -464,9 +484,10 @@ class Recorder:
         if self._file_start is None:
             self._file_start = stamp
         if sink.write(key, fields, stamp, payload):
-            counts = self.result.counts
             counts[topic] = counts.get(topic, 0) + 1
             self._written_in_file += 1
+            if options.limit is not None and counts[topic] == options.limit:
+                self._topic_done()
         if options.size is not None and sink.size >= options.size:
             if options.split:
                 self._rotate()
@@ -474,6 +495,14 @@ class Recorder:
                 self.queue.accepting = False
                 self._limit_reached.set()
                 self._stop.set()
+
+    def _topic_done(self) -> None:
+        """--limit: rosbag ends the recording once every subscribed topic has its N messages."""
+        limit = self.options.limit
+        if all(self.result.counts.get(t, 0) >= (limit or 0) for t in tuple(self._subscribed)):
+            self.queue.accepting = False
+            self._limit_reached.set()
+            self._stop.set()
 
     # -- main ------------------------------------------------------------------------------------
     def status(self) -> RecordStatus:
@@ -513,7 +542,7 @@ class Recorder:
                     break
                 if options.duration is not None and not options.split and now - started >= options.duration:
                     break
-                if (options.all_topics or options.regex) and now >= next_poll:
+                if (options.all_topics or options.regex or options.node) and now >= next_poll:
                     self._discover()
                     next_poll = now + POLL_INTERVAL
                 if report is not None:

@@ -32,6 +32,8 @@ class RecordSource(Protocol):
 
     def published_topics(self) -> list[str]: ...
 
+    def subscribed_topics(self, node: str) -> list[str]: ...
+
     def subscribe(self, topic: str, put: Put) -> None: ...
 
     def describe(self, topic: str, origin: Any) -> dict[str, str]: ...
@@ -59,6 +61,9 @@ class Ros1Source:
             return list(self.graph.master.published_topics())
         except RostoolError:
             return []  # the master is away: keep recording what is subscribed (as rosbag does)
+
+    def subscribed_topics(self, node: str) -> list[str]:
+        return _subscribed_by(self.graph, node)
 
     def subscribe(self, topic: str, put: Put) -> None:
         self.graph.node.subscribe(topic, partial(put, topic))
@@ -103,6 +108,9 @@ class Ros2Source:
         published = {ros[1] for ros in writers if ros is not None and ros[0] == "topic"}
         return sorted(t for t in published if self.include_hidden or not _hidden(t))
 
+    def subscribed_topics(self, node: str) -> list[str]:
+        return _subscribed_by(self.graph, node)
+
     def subscribe(self, topic: str, put: Put) -> None:
         def on_message(received: Received) -> None:
             put(topic, received.payload, received.type_name)
@@ -118,6 +126,14 @@ class Ros2Source:
 
     def close(self) -> None:
         self.graph.close()
+
+
+def _subscribed_by(graph: Ros1Graph | Ros2Graph, node: str) -> list[str]:
+    """The topics `node` subscribes to now; none while the graph does not answer."""
+    try:
+        return [t.name for t in graph.topics() if node in t.subscribers]
+    except RostoolError:
+        return []
 
 
 def _hidden(name: str) -> bool:

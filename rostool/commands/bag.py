@@ -490,6 +490,11 @@ def _parse_duration(text: str | None) -> float | None:
 @click.option("--size", type=click.FloatRange(min=0, min_open=True), metavar="MB",
               help="Stop at MB megabytes; with --split: per file.")  # fmt: skip
 @click.option("--split", is_flag=True, help="Start a new file (NAME_0, NAME_1, ...) at --size or --duration.")
+@click.option("--max-splits", type=click.IntRange(min=1), metavar="N",
+              help="With --split: keep at most N files, deleting the oldest.")  # fmt: skip
+@click.option("-l", "--limit", type=click.IntRange(min=1), metavar="N",
+              help="Record at most N messages per topic (ends when every topic has them).")  # fmt: skip
+@click.option("--node", metavar="NODE", help="Record the topics NODE subscribes to (also ones added later).")
 @click.option("--format", "fmt", type=click.Choice(["bag", "mcap", "db3"]),
               help="Output format (default: from -O/-o's suffix, else .bag).")  # fmt: skip
 @click.option("-b", "--buffsize", type=click.IntRange(min=1), default=256, show_default=True, metavar="MB",
@@ -513,6 +518,9 @@ def record(
     duration: str | None,
     size: float | None,
     split: bool,
+    max_splits: int | None,
+    limit: int | None,
+    node: str | None,
     fmt: Any,
     buffsize: int,
     compression: str | None,
@@ -538,7 +546,8 @@ def record(
     Examples:
       rostool bag record -a -O test.bag
       rostool bag record /odom /tf -o run             # run_2024-05-01-12-00-00.bag
-      rostool bag record -e '/camera/.*' -x '.*compressed.*' --split --size 1024
+      rostool bag record -e '/camera/.*' -x '.*compressed.*' --split --size 1024 --max-splits 5
+      rostool bag record --node /move_base -l 100
       rostool bag record -a --duration 30s --format mcap
       rostool --ros2 bag record /chatter -O chatter.mcap
     """
@@ -562,6 +571,9 @@ def record(
         duration=_parse_duration(duration),
         size=None if size is None else int(size * 1024 * 1024),
         split=split,
+        max_splits=max_splits,
+        limit=limit,
+        node=node,
         buffer_bytes=buffsize * 1024 * 1024,
         compression=compression or "none",
         force=force,
@@ -594,8 +606,10 @@ def record(
     if not quiet:
         names = ", ".join(str(path) for path in result.files)
         topics = len(result.counts)
+        removed = f" (--max-splits removed {len(result.removed)} older files)" if result.removed else ""
         click.echo(
-            f"recorded {result.messages} messages on {topics} topic{'' if topics == 1 else 's'} to {names}",
+            f"recorded {result.messages} messages on {topics} topic{'' if topics == 1 else 's'} to {names}"
+            + removed,
             err=True,
         )
 
