@@ -128,6 +128,32 @@ def write_int_bag(
     return path
 
 
+def write_rows_bag(path: Path, rows: list[tuple[str, float, int]]) -> Path:
+    """A ROS 1 bag of std_msgs/Int32 messages, each (topic, seconds after T0, value)."""
+    from rosbags.rosbag1 import Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    store = get_typestore(Stores.ROS1_NOETIC)
+    cls = store.types["std_msgs/msg/Int32"]
+    with Writer(path) as writer:
+        conns = {}
+        for topic, _t, _v in rows:
+            if topic not in conns:
+                conns[topic] = writer.add_connection(topic, "std_msgs/msg/Int32", typestore=store)
+        for topic, seconds, value in sorted(rows, key=lambda row: row[1]):
+            data = store.serialize_ros1(cls(data=value), "std_msgs/msg/Int32")
+            writer.write(conns[topic], T0 + round(seconds * 1e9), data)
+    return path
+
+
+# /numbers 0..9: 0.1 s apart, with 20 s without any message between 4 and 5
+GAP_OFFSETS = [0.0, 0.1, 0.2, 0.3, 0.4, 20.4, 20.5, 20.6, 20.7, 20.8]
+
+
+def gap_bag(tmp_path: Path) -> Path:
+    return write_rows_bag(tmp_path / "gap.bag", [("/numbers", t, i) for i, t in enumerate(GAP_OFFSETS)])
+
+
 def no_traceback(result: subprocess.CompletedProcess[str] | tuple[str, str]) -> None:
     text = result.stderr if isinstance(result, subprocess.CompletedProcess) else result[1]
     assert "Traceback" not in text, text
@@ -293,56 +319,185 @@ def test_bad_input_is_one_line(ros_env: dict[str, str], tmp_path: Path) -> None:
         no_traceback(result)
 
 
-def test_terminal_status_line_and_space_pauses(debian_master: dict[str, str], tmp_path: Path) -> None:
-    """In a terminal: rosbag's status line, space pauses and resumes, the terminal mode is restored."""
-    import pty
-    import termios
+class PtyPlay:
+    """`rostool bag play ARGS` in a pseudo-terminal that is its controlling terminal and stdin/out/err."""
 
-    env = debian_master
-    bag = write_int_bag(tmp_path / "numbers.bag", count=21, period_ns=50_000_000)  # 1 s
-    master_fd, slave_fd = pty.openpty()
-    before = termios.tcgetattr(slave_fd)
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "rostool", "bag", "play", "-d", "0", str(bag)],
-        env=env,
-        stdin=slave_fd,
-        stdout=slave_fd,
-        stderr=slave_fd,
-        start_new_session=True,
-        preexec_fn=lambda: __import__("fcntl").ioctl(0, termios.TIOCSCTTY, 0),
-    )
-    output = b""
+    def __init__(self, args: list[str], env: dict[str, str]) -> None:
+        import pty
+        import termios
 
-    def read_until(pattern: bytes, timeout: float) -> bool:
-        nonlocal output
+        self.master_fd, self.slave_fd = pty.openpty()
+        self.mode = termios.tcgetattr(self.slave_fd)
+        self.proc = subprocess.Popen(
+            [sys.executable, "-m", "rostool", "bag", "play", *args],
+            env=env,
+            stdin=self.slave_fd,
+            stdout=self.slave_fd,
+            stderr=self.slave_fd,
+            start_new_session=True,
+            preexec_fn=lambda: __import__("fcntl").ioctl(0, termios.TIOCSCTTY, 0),
+        )
+        self.output = b""
+
+    def __enter__(self) -> PtyPlay:
+        return self
+
+    def __exit__(self, *_exc: object) -> None:
+        if self.proc.poll() is None:
+            self.proc.kill()
+            self.proc.wait()
+        os.close(self.master_fd)
+        os.close(self.slave_fd)
+
+    def read_until(self, pattern: bytes, timeout: float) -> bool:
         import select
 
         deadline = time.monotonic() + timeout
         while time.monotonic() < deadline:
-            ready, _w, _x = select.select([master_fd], [], [], 0.05)
+            ready, _w, _x = select.select([self.master_fd], [], [], 0.05)
             if ready:
                 try:
-                    output += os.read(master_fd, 4096)
+                    self.output += os.read(self.master_fd, 4096)
                 except OSError:
-                    return pattern in output
-            if pattern in output:
+                    return pattern in self.output
+            if pattern in self.output:
                 return True
-        return pattern in output
+        return pattern in self.output
 
-    try:
-        assert read_until(b"Hit space to toggle paused", 20), output
-        os.write(master_fd, b" ")
-        assert read_until(b"[PAUSED ]", 5), output
+    def press(self, key: bytes) -> None:
+        os.write(self.master_fd, key)
+
+    def mode_restored(self) -> bool:
+        import termios
+
+        return bool(termios.tcgetattr(self.slave_fd) == self.mode)
+
+
+def test_terminal_status_line_and_space_pauses(debian_master: dict[str, str], tmp_path: Path) -> None:
+    """In a terminal: rosbag's status line, space pauses and resumes, the terminal mode is restored."""
+    bag = write_int_bag(tmp_path / "numbers.bag", count=21, period_ns=50_000_000)  # 1 s
+    with PtyPlay(["-d", "0", str(bag)], debian_master) as play:
+        assert play.read_until(b"Hit space to toggle paused", 20), play.output
+        play.press(b" ")
+        assert play.read_until(b"[PAUSED ]", 5), play.output
         time.sleep(1.5)  # paused longer than the whole bag lasts
-        assert proc.poll() is None
-        os.write(master_fd, b" ")
-        assert read_until(b"Done.", 10), output
-        assert proc.wait(10) == 0
-        assert b"[RUNNING]  Bag Time: 1700000000." in output
-        assert re.search(rb"Duration: 1\.000000 / 1\.000000", output) or b"/ 1.000000" in output
-        assert termios.tcgetattr(slave_fd) == before
+        assert play.proc.poll() is None
+        play.press(b" ")
+        assert play.read_until(b"Done.", 10), play.output
+        assert play.proc.wait(10) == 0
+        assert b"[RUNNING]  Bag Time: 1700000000." in play.output
+        assert re.search(rb"Duration: 1\.000000 / 1\.000000", play.output) or b"/ 1.000000" in play.output
+        assert play.mode_restored()
+
+
+def test_pause_topics_pause_before_their_message_until_space(
+    debian_master: dict[str, str], tmp_path: Path
+) -> None:
+    env = debian_master
+    rows = [("/numbers", i * 0.05, i) for i in range(20)] + [("/pause_here", 0.525, 100)]
+    bag = write_rows_bag(tmp_path / "pause.bag", rows)
+    subs = {
+        topic: start_rospy_script(TIMED_SUBSCRIBER, env, tmp_path, f"sub{n}", [topic, "std_msgs/Int32"])
+        for n, topic in enumerate(("/numbers", "/pause_here"))
+    }
+    try:
+        for topic in subs:
+            wait_subscribed(env, topic)
+        args = ["--wait-for-subscribers", "-d", "0", str(bag), "--pause-topics", "/pause_here"]
+        with PtyPlay(args, env) as play:
+            assert play.read_until(b"Hit space to toggle paused", 20), play.output
+            assert play.read_until(b"[PAUSED ]", 5), play.output  # no key pressed: /pause_here paused it
+            time.sleep(1.5)  # longer than the rest of the bag
+            assert play.proc.poll() is None
+            resumed = time.time()
+            play.press(b" ")
+            assert play.read_until(b"Done.", 10), play.output
+            assert play.proc.wait(10) == 0
+            assert b"Bag Time: 1700000000.5" in play.output  # paused at the time of the last message before
+            assert play.mode_restored()
+        time.sleep(0.5)
     finally:
-        if proc.poll() is None:
-            proc.kill()
-        os.close(master_fd)
-        os.close(slave_fd)
+        received = {topic: timed_values(stop(sub)[0]) for topic, sub in subs.items()}
+    numbers = received["/numbers"]
+    assert [v for _t, v in numbers] == [str(i) for i in range(20)]
+    assert all(t < resumed for t, v in numbers if int(v) <= 10)  # stamped before /pause_here's message
+    assert all(t > resumed for t, v in numbers if int(v) >= 11)
+    assert [v for _t, v in received["/pause_here"]] == ["100"]  # held while paused, then published
+    assert received["/pause_here"][0][0] > resumed
+
+
+def test_pause_topics_without_a_terminal_is_one_line(debian_master: dict[str, str], tmp_path: Path) -> None:
+    """rosbag would stay paused for ever at the first such message without a terminal: an error instead."""
+    env = debian_master
+    bag = write_int_bag(tmp_path / "n.bag", count=3, period_ns=10_000_000)
+    no_tty = rostool(["bag", "play", str(bag), "--pause-topics", "/numbers"], env, input="")
+    assert no_tty.returncode == 1 and no_tty.stderr.count("\n") == 1, no_tty.stderr
+    assert "--pause-topics needs a terminal on stdin" in no_tty.stderr
+    # names after the bags go to --pause-topics; they must be bag topics (before --prefix and --remap)
+    args = ["-p", "/pre", str(bag), "--pause-topics", "/numbers", "/pre/numbers"]
+    unknown = rostool(["bag", "play", *args], env)
+    assert unknown.returncode == 1 and unknown.stderr.count("\n") == 1, unknown.stderr
+    assert "--pause-topics /pre/numbers: not played" in unknown.stderr
+    for result in (no_tty, unknown):
+        no_traceback(result)
+
+
+def test_skip_empty_jumps_over_gaps_with_clock(debian_master: dict[str, str], tmp_path: Path) -> None:
+    env = debian_master
+    bag = gap_bag(tmp_path)
+    _played, got = play_into(env, tmp_path, "/numbers", "std_msgs/Int32", ["--skip-empty", "1", str(bag)])
+    assert [v for _t, v in got] == [str(i) for i in range(10)]
+    assert got[-1][0] - got[0][0] < 3.0, got  # 0.8 s of messages around the skipped 20 s
+    assert got[5][0] - got[4][0] < 0.5, got
+    # a gap shorter than SEC is played as recorded: 20.8 s at -r 20
+    kept_args = ["-r", "20", "--skip-empty", "30", str(bag)]
+    _played, kept = play_into(env, tmp_path, "/numbers", "std_msgs/Int32", kept_args)
+    assert [v for _t, v in kept] == [str(i) for i in range(10)]
+    assert kept[-1][0] - kept[0][0] > 0.8, kept
+    # /clock follows the bag time: it jumps with the schedule, never showing the skipped region
+    clock_args = ["--clock", "--skip-empty", "1", str(bag)]
+    _played, clock = play_into(env, tmp_path, "/clock", "rosgraph_msgs/Clock", clock_args, wait=("-d", "1.5"))
+    stamps = [int(v.split(".")[0]) * 1_000_000_000 + int(v.split(".")[1]) for _t, v in clock]
+    assert stamps == sorted(stamps)
+    assert {T0 + round(t * 1e9) for t in GAP_OFFSETS} <= set(stamps)
+    assert not [s for s in stamps if T0 + 500_000_000 < s < T0 + 20_400_000_000]
+
+
+def test_prefix_then_remap_as_rosbag(debian_master: dict[str, str], tmp_path: Path) -> None:
+    env = debian_master
+    bag = write_int_bag(tmp_path / "numbers.bag", count=11, period_ns=20_000_000)
+    echo = debian_popen(["rostopic", "echo", "/pre/numbers"], env)
+    try:
+        # a remapping of the bag's own name does not apply: rosbag remaps the prefixed name
+        args = ["--wait-for-subscribers", "-p", "/pre", str(bag), "/numbers:=/elsewhere"]
+        played = rostool(["bag", "play", *args], env)
+        assert played.returncode == 0, played.stderr
+        time.sleep(0.5)
+    finally:
+        out, _err = stop(echo)
+    assert echo_strings(out) == [str(i) for i in range(11)]
+    # a relative prefix, and a remapping of the prefixed name
+    remap = ["-p", "pre", str(bag), "--remap", "/pre/numbers:=/renamed"]
+    _played, renamed = play_into(env, tmp_path, "/renamed", "std_msgs/Int32", remap)
+    assert [v for _t, v in renamed] == [str(i) for i in range(11)]
+
+
+def test_prefix_and_skip_empty_into_ros2(tmp_path: Path) -> None:
+    """The same Player plays into ROS 2: prefixed topic, the 20 s gap skipped."""
+    from tests.test_ros2_graph import ros2_env, yaml_docs
+
+    env = ros2_env()
+    bag = gap_bag(tmp_path)
+    echo = rostool_popen(["topic", "echo", "/pre/numbers", "-n", "10"], env)
+    try:
+        args = ["--wait-for-subscribers", "-p", "/pre", "--skip-empty", "1", str(bag)]
+        began = time.monotonic()
+        played = rostool(["bag", "play", *args], env, timeout=60)
+        elapsed = time.monotonic() - began
+        out, err = echo.communicate(timeout=30)
+    finally:
+        if echo.poll() is None:
+            stop(echo)
+    assert played.returncode == 0 and played.stderr == "", played.stderr
+    assert yaml_docs(out) == [f"data: {i}" for i in range(10)], err
+    assert elapsed < 15, elapsed  # 20.8 s without skipping

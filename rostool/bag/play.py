@@ -11,6 +11,11 @@ topic is left, that is an error.
 `play_ros2.Ros2Player` plays into ROS 2 graphs on this schedule: it replaces `_plan` (how a connection is
 published) and the clock message.
 
+As rosbag does: --prefix is prepended to each bag topic before remapping (`-p /pre` with
+`/pre/chatter:=/talk`); --skip-empty jumps the schedule, status line and /clock over a gap longer than
+SEC to the next message; --pause-topics (bag topic names) pauses before publishing a message on one of
+them, until space ('t' toggles this). With --immediate, neither skips nor pauses apply.
+
 Timing: see `schedule.py` (absolute due times, no drift). The playback origin is the first message played
 (after -s), as rosbag's view begins at its first message: a pass never starts with a dead wait.
 """
@@ -57,6 +62,9 @@ class PlayOptions:
     wait_for_subscribers: bool = False
     pause: bool = False  # start paused (space resumes)
     immediate: bool = False  # no waiting between messages
+    prefix: str = ""  # prepended to every bag topic, before remapping
+    skip_empty: float | None = None  # seconds: longer gaps between messages are skipped
+    pause_topics: Sequence[str] = ()  # bag topics: pause before publishing a message on them
 
 
 @dataclass
@@ -91,6 +99,7 @@ class _Plan:
     convert: Callable[[Any], Any] | None  # bytes of the bag's ROS version -> the graph's
     # Decodes a converted message with the graph's own type; dropped once the first one passed.
     verify: Callable[[Any], object] | None = None
+    pause: bool = False  # a --pause-topics topic
 
 
 def parse_remaps(values: Collection[str]) -> dict[str, str]:
@@ -208,6 +217,19 @@ class Player:
         self.total = (reader.end_ns - reader.start_ns) / 1e9 if reader.message_count else 0.0
         self.window = self._window()
         self.connections = reader.select([resolve(t) for t in options.topics])
+        self.pause_topics = self._pause_topics()
+        self._pause_for_topics = bool(self.pause_topics)  # 't' toggles it
+        self._skip_ns = None if options.skip_empty is None else round(options.skip_empty * 1e9)
+
+    def _pause_topics(self) -> frozenset[str]:
+        names = frozenset(resolve(t) for t in self.options.pause_topics)
+        unknown = sorted(names - {c.topic for c in self.connections})
+        if unknown:
+            raise RostoolError(
+                f"--pause-topics {', '.join(unknown)}: not played from the bag "
+                "(name the bag's topic, before --prefix and --remap)"
+            )
+        return names
 
     def _window(self) -> tuple[int, int | None]:
         start = self.reader.start_ns + round(self.options.start * 1e9)
@@ -231,7 +253,9 @@ class Player:
 
     def _plan(self, conn: Connection) -> None:
         """Plan how `conn`'s messages are published, or skip its topic."""
-        topic = self.options.remap.get(conn.topic, conn.topic)
+        options = self.options
+        topic = resolve(options.prefix + conn.topic) if options.prefix else conn.topic
+        topic = options.remap.get(topic, topic)  # rosbag remaps the prefixed name
         try:
             kind = self._kind_of(conn)
         except RostoolError as err:
@@ -246,7 +270,8 @@ class Player:
         else:
             publisher = kind.advertise(topic)
             self._publishers[topic] = (publisher, kind.key)
-        self._plans[id(conn)] = _Plan(topic, publisher, kind.convert, kind.verify)
+        pause = conn.topic in self.pause_topics
+        self._plans[id(conn)] = _Plan(topic, publisher, kind.convert, kind.verify, pause)
 
     def _kind_of(self, conn: Connection) -> _Kind:
         msg_type, convert, latch = self._type_of(conn)
@@ -359,7 +384,7 @@ class Player:
                 self.clock.start(stamp, now)
                 self._next_tick = now
                 self._started = True
-            wait(stamp)
+            wait(stamp, plan.pause)
             if clock_pub is not None:
                 if self.clock_per_message:
                     clock_pub.publish_raw(self._clock_message(stamp))
@@ -370,11 +395,17 @@ class Player:
         self.result.published += published
         return published
 
-    def _wait(self, stamp: int) -> None:
+    def _wait(self, stamp: int, pause_topic: bool = False) -> None:
         if self.options.immediate and not self.clock.paused:
             return
         clock = self.clock
         clock_pub = self._clock_pub
+        now = time.perf_counter()
+        if self._skip_ns is not None and stamp - clock.bag_time(now) > self._skip_ns:
+            clock.start(stamp, now)  # over the gap: due now (rosbag publishes it even while paused)
+            return
+        if pause_topic and self._pause_for_topics:
+            clock.pause(now)
         while True:
             now = time.perf_counter()
             if now >= self._next_ui:
@@ -414,6 +445,8 @@ class Player:
                     self.clock.pause(now)
             elif key == "s" and self.clock.paused:
                 self._step = True
+            elif key == "t":
+                self._pause_for_topics = not self._pause_for_topics
         if console.show_status:
             bag_ns = self.clock.bag_time(now) if self._started else self.window[0]
             state = "PAUSED " if self.clock.paused else "RUNNING"

@@ -325,6 +325,12 @@ def reindex(files: tuple[str, ...]) -> None:
 @click.option("-i", "--immediate", is_flag=True, help="Publish all messages without waiting.")
 @click.option("-k", "--keep-alive", is_flag=True, help="Keep the (latched) publishers alive at the end.")
 @click.option("--remap", multiple=True, metavar="FROM:=TO", help="Publish topic FROM as TO (repeatable).")
+@click.option("-p", "--prefix", default="", metavar="PREFIX",
+              help="Prefix every topic; --remap then names the prefixed topic, as in rosbag.")  # fmt: skip
+@click.option("--skip-empty", type=click.FloatRange(min=0, min_open=True), metavar="SEC",
+              help="Skip regions with no message for more than SEC seconds.")  # fmt: skip
+@click.option("--pause-topics", multiple=True, metavar="T",
+              help="Pause at each message on these bag topics (space resumes; needs a tty).")  # fmt: skip
 @click.option("-q", "--quiet", is_flag=True, help="No status line and no messages on stderr.")
 @distro_option
 @click.pass_context
@@ -344,6 +350,9 @@ def play(
     immediate: bool,
     keep_alive: bool,
     remap: tuple[str, ...],
+    prefix: str,
+    skip_empty: float | None,
+    pause_topics: tuple[str, ...],
     quiet: bool,
     distro: str,
 ) -> None:
@@ -354,15 +363,16 @@ def play(
     type has no ROS 1 equivalent are skipped with a warning. Into a ROS 2 graph (--ros2), ROS 2 bags'
     CDR bytes are published unchanged with the bag's type names (transient_local where recorded so), and
     ROS 1 bags are converted as `bag convert` does.
-    On a terminal, a status line shows the bag time and space pauses/resumes ('s' steps while paused).
-    Remappings may also be given as arguments (`/chatter:=/talk`), and with --topics, further topic
-    names after the bags.
+    On a terminal, a status line shows the bag time and space pauses/resumes ('s' steps while paused,
+    't' toggles --pause-topics). Remappings may also be given as arguments (`/chatter:=/talk`), and with
+    --topics (else --pause-topics), further topic names after the bags.
 
     \b
     Examples:
       rostool bag play run.bag
       rostool bag play -r 2 -s 10 -u 5 run.bag --topics /odom,/tf
       rostool bag play -l --clock run.bag /scan:=/scan_raw
+      rostool bag play -p /replay --skip-empty 5 run.bag --pause-topics /goal
       rostool bag play talker.mcap
       rostool --ros2 bag play talker.mcap --clock
     """
@@ -370,7 +380,9 @@ def play(
     from rostool.bag.reader import BagReader
     from rostool.commands._common import live_graph
 
-    paths, remap_args, extra_topics = _play_arguments(args, bool(topics))
+    paths, remap_args, extra_topics = _play_arguments(args, bool(topics or pause_topics))
+    extra_pause = [] if topics else extra_topics
+    extra_topics = extra_topics if topics else []
     ros2 = _selected_version(ctx) == 2
     options = PlayOptions(
         rate=rate,
@@ -386,18 +398,22 @@ def play(
         wait_for_subscribers=wait_for_subscribers,
         pause=pause,
         immediate=immediate,
+        prefix=prefix,
+        skip_empty=skip_empty,
+        pause_topics=[*_topic_list(pause_topics), *extra_pause],
     )
     warn = (lambda text: None) if quiet else (lambda text: click.echo(f"rostool: warning: {text}", err=True))
     with BagReader(paths, distro) as reader, live_graph(ctx) as graph:
         console = Console.detect(quiet)
-        if pause and not console.keyboard:
-            raise RostoolError("--pause needs a terminal on stdin to resume with space")
         if ros2:
             from rostool.bag.play_ros2 import Ros2Player
 
             player: Player = Ros2Player(reader, _ros2(graph), options, console, warn)
         else:
             player = Player(reader, _ros1(graph), options, console, warn)
+        for flag, used in (("--pause", pause), ("--pause-topics", options.pause_topics)):
+            if used and not console.keyboard:  # rosbag would stay paused forever
+                raise RostoolError(f"{flag} needs a terminal on stdin to resume with space")
         with console:
             player.advertise()
             result = player.run()
