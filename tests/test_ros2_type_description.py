@@ -158,13 +158,18 @@ def test_the_service_answers_for_used_types_only(status_publisher: dict[str, str
     assert wrong_hash["successful"] is False and "not RIHS01_00" in str(wrong_hash["failure_reason"])
 
 
-def test_a_publisher_without_the_service_keeps_the_unknown_type_error(sources: Path, tmp_path: Path) -> None:
-    proc, env = start_raw(sources, "silent")
+def echo_raw(sources: Path, mode: str, cwd: Path) -> subprocess.CompletedProcess[str]:
+    """`topic echo /raw` (no interface sources) against a raw publisher in `mode`."""
+    proc, env = start_raw(sources, mode)
     try:
-        echoed = rostool(["topic", "echo", "/raw", "-n", "1"], env, cwd=tmp_path)
+        return rostool(["topic", "echo", "/raw", "-n", "1"], env, cwd=cwd)
     finally:
         proc.kill()
         proc.communicate()
+
+
+def test_a_publisher_without_the_service_keeps_the_unknown_type_error(sources: Path, tmp_path: Path) -> None:
+    echoed = echo_raw(sources, "silent", tmp_path)
     assert echoed.returncode == 1 and echoed.stderr.count("\n") == 1, echoed.stderr
     assert "unknown message type 'robo_msgs/msg/Part'" in echoed.stderr
     reason = "The publisher did not provide its type description (/raw: the node does not serve"
@@ -174,12 +179,7 @@ def test_a_publisher_without_the_service_keeps_the_unknown_type_error(sources: P
 def test_a_description_that_does_not_hash_to_the_announced_hash_is_refused(
     sources: Path, tmp_path: Path
 ) -> None:
-    proc, env = start_raw(sources, "tampered")
-    try:
-        echoed = rostool(["topic", "echo", "/raw", "-n", "1"], env, cwd=tmp_path)
-    finally:
-        proc.kill()
-        proc.communicate()
+    echoed = echo_raw(sources, "tampered", tmp_path)
     assert echoed.returncode == 1 and echoed.stderr.count("\n") == 1, echoed.stderr
     assert "unknown message type 'robo_msgs/msg/Part'" in echoed.stderr
     assert "the description of robo_msgs/msg/Part hashes to RIHS01_" in echoed.stderr
