@@ -31,12 +31,10 @@ def test_node_list_info_ping_kill(debian_master: dict[str, str], tmp_path: Path)
     pub = start_rospy_script(HELLO_PUBLISHER, env, tmp_path, "hello")
     sub = start_rospy_script(HELLO_SUBSCRIBER, env, tmp_path, "listener")
     try:
-        assert wait_until(
-            lambda: "/hello_world_sub_node" in rostool(["node", "list"], env).stdout.split(), 30
-        )
+        both = {"/hello_world_pub_node", "/hello_world_sub_node"}
+        assert wait_until(lambda: both <= set(rostool(["node", "list"], env).stdout.split()), 30)
         names = rostool(["node", "list"], env).stdout.split()
         assert names == debian(["rosnode", "list"], env).stdout.split()
-        assert {"/hello_world_pub_node", "/hello_world_sub_node"} <= set(names)
         assert wait_until(
             lambda: "Connections:" in rostool(["node", "info", "/hello_world_pub_node"], env).stdout, 30
         )
