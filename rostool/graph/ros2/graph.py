@@ -103,28 +103,33 @@ class Session:
     ) -> Any:
         from cyclonedds.pub import DataWriter
 
-        writer = DataWriter(
-            self.participant.dp, self.topic(dds_name, store_name, request_header),
-            qos=dds.to_dds_qos(profile, self.types.user_data(store_name)),
-        )  # fmt: skip
-        with self._lock:
-            self.node.writers.append(writer.guid.bytes)
-            self.announce()
-        return writer
+        return self._announced(DataWriter, self.node.writers, dds_name, store_name, profile, request_header)
 
     def reader(
         self, dds_name: str, store_name: str, profile: dds.QosProfile, request_header: bool = False
     ) -> Any:
         from cyclonedds.sub import DataReader
 
-        reader = DataReader(
+        return self._announced(DataReader, self.node.readers, dds_name, store_name, profile, request_header)
+
+    def _announced(
+        self,
+        kind: Any,
+        announced: list[bytes],
+        dds_name: str,
+        store_name: str,
+        profile: dds.QosProfile,
+        request_header: bool,
+    ) -> Any:
+        """A DDS reader or writer with the type hash in USER_DATA, listed on ros_discovery_info."""
+        endpoint = kind(
             self.participant.dp, self.topic(dds_name, store_name, request_header),
             qos=dds.to_dds_qos(profile, self.types.user_data(store_name)),
         )  # fmt: skip
         with self._lock:
-            self.node.readers.append(reader.guid.bytes)
+            announced.append(endpoint.guid.bytes)
             self.announce()
-        return reader
+        return endpoint
 
     def used_types(self) -> set[str]:
         """The message types of this session's topics (service topics give their request/reply types)."""
