@@ -383,7 +383,6 @@ def play(
     paths, remap_args, extra_topics = _play_arguments(args, bool(topics or pause_topics))
     extra_pause = [] if topics else extra_topics
     extra_topics = extra_topics if topics else []
-    ros2 = _selected_version(ctx) == 2
     options = PlayOptions(
         rate=rate,
         start=start,
@@ -391,7 +390,7 @@ def play(
         loop=loop,
         topics=[*_topic_list(topics), *extra_topics],
         clock=clock,
-        hz=hz if hz is not None else (40.0 if ros2 else 100.0),
+        hz=hz or 100.0,  # rosbag's rate; a ROS 2 graph's default (rosbag2's) is set below
         delay=delay,
         remap=parse_remaps([*remap_args, *remap]),
         keep_alive=keep_alive,
@@ -405,9 +404,10 @@ def play(
     warn = (lambda text: None) if quiet else (lambda text: click.echo(f"rostool: warning: {text}", err=True))
     with BagReader(paths, distro) as reader, live_graph(ctx) as graph:
         console = Console.detect(quiet)
-        if ros2:
+        if graph.ros_version == 2:
             from rostool.bag.play_ros2 import Ros2Player
 
+            options.hz = hz or 40.0
             player: Player = Ros2Player(reader, _ros2(graph), options, console, warn)
         else:
             player = Player(reader, _ros1(graph), options, console, warn)
@@ -437,13 +437,6 @@ def _play_arguments(args: Sequence[str], with_topics: bool) -> tuple[list[str], 
     if not paths:
         raise RostoolError("give at least one bag to play")
     return paths, remaps, topics
-
-
-def _selected_version(ctx: click.Context) -> int:
-    from rostool.commands._common import ros_version
-    from rostool.graph import select_ros_version
-
-    return select_ros_version(ros_version(ctx))
 
 
 def _ros2(graph: object) -> Ros2Graph:
@@ -593,7 +586,6 @@ def record(
         buffer_bytes=buffsize * 1024 * 1024,
         compression=compression or "none",
         force=force,
-        default_fmt="mcap" if _selected_version(ctx) == 2 else "bag",
     )
     if compression and options.fmt not in (None, "bag"):
         raise RostoolError("--lz4/--bz2 compress ROS 1 .bag chunks; leave them out with --format mcap/db3")
@@ -601,6 +593,7 @@ def record(
     stop = threading.Event()
     with live_graph(ctx, interface_paths) as graph:
         use_qos(graph, qos)
+        options.default_fmt = "mcap" if graph.ros_version == 2 else "bag"
         recorder = Recorder(_record_source(graph, progress, include_hidden_topics), options)
         with stop_on_signals(stop):
             try:
