@@ -15,9 +15,9 @@ VENV_PYTHON = str(ROOT / ".venv" / "bin" / "python")
 sys.path.insert(0, str(ROOT))
 
 # The benchmarks use the tests' loopback helpers, so both start peers the same way.
-from tests.support import debian_env, free_port, ros1_env  # noqa: E402
+from tests.support import debian_env, free_port, ros1_env, ros2_env  # noqa: E402
 
-__all__ = ["debian_env", "free_port", "ros1_env"]
+__all__ = ["debian_env", "free_port", "ros1_env", "ros2_env"]
 
 
 def loopback_env(port: int) -> dict[str, str]:

@@ -9,8 +9,6 @@ No ROS 2 installation here, so there is no side-by-side ros2cli column: numbers 
 from __future__ import annotations
 
 import json
-import os
-import random
 import signal
 import statistics
 import subprocess
@@ -19,9 +17,7 @@ import threading
 import time
 from typing import IO
 
-from _graph import cpu_seconds, rostool_cmd
-
-from rostool.graph.ros2.dds import cyclone_config
+from _graph import cpu_seconds, ros2_env, rostool_cmd
 
 VENV_PYTHON = sys.executable
 
@@ -54,14 +50,6 @@ except KeyboardInterrupt:
     pass
 graph.close()
 """
-
-
-def ros2_env() -> dict[str, str]:
-    env = {k: v for k, v in os.environ.items() if not k.startswith("ROS") and k != "CYCLONEDDS_URI"}
-    env.update(ROS_VERSION="2", ROS_DOMAIN_ID=str(random.randint(100, 229)), PYTHONUNBUFFERED="1")
-    env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
-    assert "127.0.0.1" in cyclone_config(env)  # never anything but loopback
-    return env
 
 
 def start_publisher(env: dict[str, str], count: int, rate: float, subs: int) -> subprocess.Popen[str]:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import random
 import shutil
 import socket
 import subprocess
@@ -52,6 +53,28 @@ def ros1_env(port: int, home: Path) -> dict[str, str]:
         ROS_LOG_DIR=str(home / "log"),
         PYTHONUNBUFFERED="1",
     )
+    return env
+
+
+_used_domains: set[int] = set()
+
+
+def ros2_env(**extra: str) -> dict[str, str]:
+    """ROS 2 over DDS for one test: its own ROS_DOMAIN_ID, rostool's LOCALHOST discovery (127.0.0.1 only,
+    multicast off), no inherited ROS settings."""
+    from rostool.graph.ros2.dds import cyclone_config
+
+    domain = random.choice([d for d in range(100, 230) if d not in _used_domains])
+    _used_domains.add(domain)
+    env = {k: v for k, v in os.environ.items() if not k.startswith("ROS") and k != "CYCLONEDDS_URI"}
+    env.update(
+        ROS_VERSION="2",
+        ROS_DOMAIN_ID=str(domain),
+        ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST",
+        PYTHONUNBUFFERED="1",
+        **extra,
+    )
+    assert "127.0.0.1" in cyclone_config(env)  # never anything but loopback
     return env
 
 

@@ -7,8 +7,6 @@ multicast off, 127.0.0.1 as the only peer), so nothing leaves the machine and te
 from __future__ import annotations
 
 import json
-import os
-import random
 import subprocess
 import sys
 import time
@@ -17,23 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.support import TESTDATA, rostool, rostool_popen, stop, wait_until
-
-_used_domains: set[int] = set()
-
-
-def ros2_env(**extra: str) -> dict[str, str]:
-    domain = random.choice([d for d in range(100, 230) if d not in _used_domains])
-    _used_domains.add(domain)
-    env = {k: v for k, v in os.environ.items() if not k.startswith("ROS") and k != "CYCLONEDDS_URI"}
-    env.update(
-        ROS_VERSION="2",
-        ROS_DOMAIN_ID=str(domain),
-        ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST",
-        PYTHONUNBUFFERED="1",
-        **extra,
-    )
-    return env
+from tests.support import TESTDATA, ros2_env, rostool, rostool_popen, stop, wait_until
 
 
 @pytest.fixture
