@@ -380,9 +380,7 @@ class Recorder:
         self._headers: dict[tuple[str, Any], tuple[object, dict[str, str]]] = {}
         self._opened = threading.Event()
         self._open_error: RostoolError | None = None
-        self._topics_seen: set[str] = set()
         self._written_in_file = 0
-        self._lock = threading.Lock()
 
     # -- files -----------------------------------------------------------------------------------
     def _open_next(self) -> Sink:
