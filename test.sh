@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Runs the whole test suite. Installs what the tests need: rostool with its test extras in ./.venv and,
-# when missing and running as root, Debian's real ROS 1 tools (the peers every ROS 1 test talks to).
+# Runs the whole test suite. Installs what the tests need: rostool with its test extras in ./.venv; when
+# missing and running as root, Debian's real ROS 1 tools (the peers every ROS 1 test talks to); and the real
+# ROS 2 peers (rclpy of Jazzy and Kilted with Fast DDS), each in its own cached venv.
 set -euo pipefail
 cd "$(dirname "$0")"
 
@@ -16,6 +17,22 @@ if ! { command -v rosmaster && /usr/bin/python3 -c 'import rospy, actionlib, std
     echo "test.sh: Debian's ROS 1 packages are missing and this is not root; ROS 1 tests will be skipped" >&2
   fi
 fi
+
+# The real ROS 2 peers: rclpy with Fast DDS (rmw_fastrtps_cpp) and the message packages the tests use, one
+# venv per distro, cached outside the repo (ROSTOOL_PEERS_DIR) and reinstalled only when this list changes.
+export ROSTOOL_PEERS_DIR="${ROSTOOL_PEERS_DIR:-$HOME/.cache/rostool/peers}"
+ros2_messages=(std-msgs std-srvs test-msgs geometry-msgs sensor-msgs nav-msgs)
+for distro in jazzy kilted; do
+  peer_packages=("ros-$distro-rclpy" "ros-$distro-rmw-fastrtps-cpp" "${ros2_messages[@]/#/ros-$distro-}")
+  venv="$ROSTOOL_PEERS_DIR/$distro"
+  if [ "$(cat "$venv/.installed" 2>/dev/null)" != "${peer_packages[*]}" ]; then
+    echo "test.sh: installing the $distro rclpy peers into $venv"
+    rm -rf "$venv"
+    python3 -m venv "$venv"
+    "$venv/bin/python" -m pip install -q --disable-pip-version-check "${peer_packages[@]}"
+    echo "${peer_packages[*]}" > "$venv/.installed"
+  fi
+done
 
 if [ ! -x .venv/bin/python ]; then
   python3 -m venv .venv

@@ -19,6 +19,9 @@ from tests.support import (
     wait_until,
 )
 
+# the real ROS 2 peers' fixtures (distro, graph_env, start_peer)
+pytest_plugins = ("tests.ros2_peers",)
+
 
 @pytest.fixture
 def ros_env(tmp_path: Path) -> dict[str, str]:

@@ -1,0 +1,185 @@
+"""A real ROS 2 node on rclpy, run with a peer venv's python (Jazzy or Kilted, Fast DDS): the referee of
+every ROS 2 test. It takes roles from its arguments and reports what it sees as JSON lines on stdout:
+
+    {"event": "ready"}                                   after every entity is created
+    {"event": "heard", "topic": T, "data": ...}          --listen: each message (std_msgs/String data)
+    {"event": "service", "data": true}                   --service: each std_srvs/SetBool request
+    {"event": "goal", "order": 5} / "cancel" / "done"    --action: test_msgs/Fibonacci server
+    {"event": "param", "name": N, "value": V}            --params: each accepted parameter change
+    {"event": "graph", ...}                              --watch: this node's view of the graph
+
+Not a pytest module: tests start it through tests/ros2_peers.py.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import json
+import sys
+import threading
+import time
+
+import rclpy
+from rclpy.action import ActionServer, CancelResponse
+from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+
+_print_lock = threading.Lock()
+
+EVERY_TYPE = {
+    "flag": True,
+    "count": 3,
+    "speed": 0.5,
+    "label": "r2",
+    "blob": b"\x01\x02",
+    "switches": [True, False],
+    "ids": [1, 2, 3],
+    "gains": [0.1, 0.2],
+    "names": ["a", "b"],
+}
+
+
+def emit(event: str, **fields: object) -> None:
+    with _print_lock:
+        sys.stdout.write(json.dumps({"event": event, **fields}, default=repr) + "\n")
+        sys.stdout.flush()
+
+
+def plain(value: object) -> object:
+    if isinstance(value, (bytes, bytearray)):
+        return list(value)
+    if hasattr(value, "tolist"):
+        return value.tolist()
+    if isinstance(value, (list, tuple)):
+        return [plain(v) for v in value]
+    return value
+
+
+class Peer(Node):
+    def __init__(self, args: argparse.Namespace) -> None:
+        super().__init__(args.name, namespace=args.namespace)
+        self.count = 0
+        if args.talk:
+            from std_msgs.msg import String
+
+            qos = QoSProfile(depth=args.depth)
+            if args.best_effort:
+                qos.reliability = ReliabilityPolicy.BEST_EFFORT
+            if args.latched:
+                qos.durability = DurabilityPolicy.TRANSIENT_LOCAL
+            self.publisher = self.create_publisher(String, args.talk, qos)
+            self.message = String()
+            self.create_timer(1.0 / args.rate, self.tick)
+        for topic in args.listen:
+            from std_msgs.msg import String
+
+            self.create_subscription(
+                String, topic, lambda m, t=topic: emit("heard", topic=t, data=m.data), 10
+            )
+        if args.params:
+            for name, value in EVERY_TYPE.items():
+                self.declare_parameter(name, value)
+            self.add_post_set_parameters_callback(self.on_params)
+        if args.service:
+            from std_srvs.srv import SetBool
+
+            self.create_service(SetBool, args.service, self.on_set_bool)
+        if args.action:
+            from test_msgs.action import Fibonacci
+
+            self.fibonacci = Fibonacci
+            self.step = args.step
+            ActionServer(self, Fibonacci, args.action, self.on_goal, cancel_callback=self.on_cancel)
+        if args.watch:
+            self.create_timer(0.5, self.report_graph)
+
+    def tick(self) -> None:
+        self.count += 1
+        self.message.data = f"hello {self.count}"
+        self.publisher.publish(self.message)
+
+    def on_params(self, parameters: list) -> None:
+        for parameter in parameters:
+            emit("param", name=parameter.name, value=plain(parameter.value))
+
+    def on_set_bool(self, request: object, response: object) -> object:
+        emit("service", data=request.data)  # type: ignore[attr-defined]
+        response.success = bool(request.data)  # type: ignore[attr-defined]
+        response.message = f"flag is {request.data}"  # type: ignore[attr-defined]
+        return response
+
+    def on_cancel(self, _goal: object) -> CancelResponse:
+        emit("cancel")
+        return CancelResponse.ACCEPT
+
+    def on_goal(self, goal: object) -> object:
+        order = goal.request.order  # type: ignore[attr-defined]
+        emit("goal", order=order)
+        sequence = [0, 1]
+        feedback = self.fibonacci.Feedback()
+        for _ in range(1, order):
+            if goal.is_cancel_requested:  # type: ignore[attr-defined]
+                goal.canceled()  # type: ignore[attr-defined]
+                emit("canceled")
+                result = self.fibonacci.Result()
+                result.sequence = sequence
+                return result
+            sequence.append(sequence[-1] + sequence[-2])
+            feedback.sequence = sequence
+            goal.publish_feedback(feedback)  # type: ignore[attr-defined]
+            time.sleep(self.step)
+        goal.succeed()  # type: ignore[attr-defined]
+        emit("done", sequence=sequence)
+        result = self.fibonacci.Result()
+        result.sequence = sequence
+        return result
+
+    def report_graph(self) -> None:
+        topics = dict(self.get_topic_names_and_types())
+        publishers = {
+            topic: sorted(
+                (info.node_namespace.rstrip("/") + "/" + info.node_name)
+                for info in self.get_publishers_info_by_topic(topic)
+            )
+            for topic in topics
+        }
+        subscribers = {
+            topic: sorted(
+                (info.node_namespace.rstrip("/") + "/" + info.node_name)
+                for info in self.get_subscriptions_info_by_topic(topic)
+            )
+            for topic in topics
+        }
+        nodes = sorted(ns.rstrip("/") + "/" + n for n, ns in self.get_node_names_and_namespaces())
+        emit("graph", nodes=nodes, topics=topics, publishers=publishers, subscribers=subscribers)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--name", default="peer")
+    parser.add_argument("--namespace", default="")
+    parser.add_argument("--talk", help="publish std_msgs/String 'hello N' on this topic")
+    parser.add_argument("--rate", type=float, default=10.0)
+    parser.add_argument("--depth", type=int, default=10)
+    parser.add_argument("--best-effort", action="store_true")
+    parser.add_argument("--latched", action="store_true")
+    parser.add_argument("--listen", action="append", default=[])
+    parser.add_argument("--params", action="store_true", help="declare a parameter of every type")
+    parser.add_argument("--service", help="serve std_srvs/srv/SetBool here")
+    parser.add_argument("--action", help="serve test_msgs/action/Fibonacci here")
+    parser.add_argument("--step", type=float, default=0.1, help="seconds between Fibonacci feedbacks")
+    parser.add_argument("--watch", action="store_true", help="report the graph every 0.5 s")
+    args = parser.parse_args()
+    rclpy.init()
+    node = Peer(args)
+    executor = MultiThreadedExecutor(num_threads=4)
+    executor.add_node(node)
+    emit("ready", node=node.get_fully_qualified_name())
+    with contextlib.suppress(KeyboardInterrupt, ExternalShutdownException):
+        executor.spin()
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,203 @@
+"""Real ROS 2 peers for the tests: rclpy nodes of Jazzy and Kilted on Fast DDS, each distro in its own venv
+that ./test.sh installs (ROSTOOL_PEERS_DIR, default ~/.cache/rostool/peers/<distro>).
+
+Every peer runs loopback-only: a Fast DDS XML profile (UDPv4 only, interface whitelist 127.0.0.1, initial
+peer 127.0.0.1, builtin transports off, so no multicast and no shared memory), and no
+ROS_AUTOMATIC_DISCOVERY_RANGE in its environment (rmw_fastrtps's LOCALHOST mode would replace the
+profile's transports and bind the other interfaces). `RclpyPeer.stop` checks the sockets it had open.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import subprocess
+import threading
+import time
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from tests.support import IN_CI, ros2_env
+
+DISTROS = ("jazzy", "kilted")
+PEER_SCRIPT = Path(__file__).resolve().parent / "rclpy_peer.py"
+PEERS_DIR = Path(os.environ.get("ROSTOOL_PEERS_DIR") or Path.home() / ".cache" / "rostool" / "peers")
+
+FASTDDS_PROFILE = """<?xml version="1.0" encoding="UTF-8"?>
+<profiles xmlns="http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles">
+  <transport_descriptors>
+    <transport_descriptor>
+      <transport_id>loopback_udp</transport_id>
+      <type>UDPv4</type>
+      <interfaceWhiteList><address>127.0.0.1</address></interfaceWhiteList>
+    </transport_descriptor>
+  </transport_descriptors>
+  <participant profile_name="loopback_only" is_default_profile="true">
+    <rtps>
+      <userTransports><transport_id>loopback_udp</transport_id></userTransports>
+      <useBuiltinTransports>false</useBuiltinTransports>
+      <builtin>
+        <metatrafficUnicastLocatorList>
+          <locator><udpv4><address>127.0.0.1</address></udpv4></locator>
+        </metatrafficUnicastLocatorList>
+        <initialPeersList>
+          <locator><udpv4><address>127.0.0.1</address></udpv4></locator>
+        </initialPeersList>
+      </builtin>
+    </rtps>
+  </participant>
+</profiles>
+"""
+
+
+def peer_python(distro: str) -> Path:
+    """The interpreter of a distro's peer venv; in CI its absence fails the test, elsewhere it skips."""
+    python = PEERS_DIR / distro / "bin" / "python"
+    if not python.exists():
+        message = f"the {distro} rclpy peer venv is missing at {python.parent.parent}: run ./test.sh"
+        if IN_CI:
+            pytest.fail(message)
+        pytest.skip(message)
+    return python
+
+
+def peer_env(env: dict[str, str], tmp_path: Path) -> dict[str, str]:
+    """The peer's side of a test's ROS 2 environment: the same ROS_DOMAIN_ID, Fast DDS on loopback only."""
+    profile = tmp_path / "fastdds_loopback.xml"
+    if not profile.exists():
+        profile.write_text(FASTDDS_PROFILE)
+    hidden = ("ROS_AUTOMATIC_DISCOVERY_RANGE", "ROS_LOCALHOST_ONLY", "ROS_STATIC_PEERS", "CYCLONEDDS_URI",
+              "PYTHONPATH", "PYTHONHOME", "VIRTUAL_ENV")  # fmt: skip
+    clean = {k: v for k, v in env.items() if k not in hidden}
+    home = tmp_path / "peer_ros_home"
+    home.mkdir(exist_ok=True)
+    clean.update(
+        RMW_IMPLEMENTATION="rmw_fastrtps_cpp",
+        FASTRTPS_DEFAULT_PROFILES_FILE=str(profile),  # Fast DDS 2 (Jazzy)
+        FASTDDS_DEFAULT_PROFILES_FILE=str(profile),  # Fast DDS 3 (Kilted)
+        ROS_HOME=str(home),
+        ROS_LOG_DIR=str(home / "log"),
+        PYTHONUNBUFFERED="1",
+    )
+    return clean
+
+
+class RclpyPeer:
+    """One running rclpy node (tests/rclpy_peer.py) and the JSON events it reported."""
+
+    def __init__(self, distro: str, env: dict[str, str], tmp_path: Path, args: list[str]) -> None:
+        self.distro = distro
+        self.events: list[dict[str, Any]] = []
+        self._changed = threading.Condition()
+        self.proc = subprocess.Popen(
+            [str(peer_python(distro)), str(PEER_SCRIPT), *args],
+            env=peer_env(env, tmp_path),
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+        self._stderr: list[str] = []
+        threading.Thread(target=self._read_stdout, daemon=True).start()
+        threading.Thread(target=self._read_stderr, daemon=True).start()
+
+    def _read_stdout(self) -> None:
+        assert self.proc.stdout is not None
+        for line in self.proc.stdout:
+            try:
+                event = json.loads(line)
+            except ValueError:
+                continue
+            with self._changed:
+                self.events.append(event)
+                self._changed.notify_all()
+
+    def _read_stderr(self) -> None:
+        assert self.proc.stderr is not None
+        for line in self.proc.stderr:
+            self._stderr.append(line)
+
+    @property
+    def stderr(self) -> str:
+        return "".join(self._stderr)
+
+    def of(self, kind: str) -> list[dict[str, Any]]:
+        with self._changed:
+            return [e for e in self.events if e["event"] == kind]
+
+    def wait_for(
+        self, kind: str, where: Callable[[dict[str, Any]], bool] = lambda _e: True, timeout: float = 15.0
+    ) -> dict[str, Any]:
+        """The first `kind` event (already seen or still to come) that `where` accepts."""
+        deadline = time.monotonic() + timeout
+        with self._changed:
+            while True:
+                for event in self.events:
+                    if event["event"] == kind and where(event):
+                        return event
+                left = deadline - time.monotonic()
+                if left <= 0 or self.proc.poll() is not None:
+                    raise AssertionError(
+                        f"{self.distro} peer: no {kind!r} event within {timeout} s "
+                        f"(exit {self.proc.poll()}); stderr: {self.stderr[-2000:]}"
+                    )
+                self._changed.wait(min(left, 0.2))
+
+    def bound_addresses(self) -> list[str]:
+        """Local addresses of the UDP and TCP sockets the peer has open (from `ss`)."""
+        found = []
+        for proto in ("-uanp", "-tanp"):
+            out = subprocess.run(["ss", proto], capture_output=True, text=True).stdout
+            for line in out.splitlines():
+                if f"pid={self.proc.pid}," in line:
+                    found.append(line.split()[3])
+        return found
+
+    def stop(self) -> None:
+        if self.proc.poll() is None:
+            self.proc.send_signal(2)
+            try:
+                self.proc.wait(timeout=5)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait()
+
+
+def assert_loopback_only(addresses: list[str]) -> None:
+    loopback = re.compile(r"^(127\.[\d.]+|\[::1\]|\[::ffff:127\.[\d.]+\]):")
+    outside = [a for a in addresses if not loopback.match(a)]
+    assert not outside, f"a peer bound a non-loopback address: {outside}"
+
+
+@pytest.fixture(params=DISTROS)
+def distro(request: pytest.FixtureRequest) -> str:
+    peer_python(request.param)
+    return str(request.param)
+
+
+@pytest.fixture
+def graph_env() -> dict[str, str]:
+    """rostool's environment for one test's ROS 2 graph (its own domain, loopback only)."""
+    return ros2_env()
+
+
+@pytest.fixture
+def start_peer(distro: str, graph_env: dict[str, str], tmp_path: Path) -> Iterator[Callable[..., RclpyPeer]]:
+    """start_peer("--talk", "/chatter", ...) runs a real rclpy node of the test's distro in the test's
+    domain and waits until it is ready; every peer is stopped at the end and must have bound loopback only."""
+    peers: list[RclpyPeer] = []
+
+    def start(*args: str) -> RclpyPeer:
+        peer = RclpyPeer(distro, graph_env, tmp_path, list(args))
+        peers.append(peer)
+        peer.wait_for("ready", timeout=30)
+        return peer
+
+    yield start
+    for peer in peers:
+        addresses = peer.bound_addresses()
+        peer.stop()
+        assert_loopback_only(addresses)
