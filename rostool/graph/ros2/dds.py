@@ -68,10 +68,10 @@ def cyclone_config(env: Mapping[str, str] = os.environ) -> str:
     general = ""
     discovery = ""
     if scope == "LOCALHOST":
-        general = (
-            '<Interfaces><NetworkInterface address="127.0.0.1"/></Interfaces>'
-            "<AllowMulticast>false</AllowMulticast>"
-        )
+        general = "<AllowMulticast>false</AllowMulticast>"
+        if not _user_selects_interfaces(env.get("CYCLONEDDS_URI", "")):
+            # Cyclone refuses an interface selected twice (`lo` by the user, 127.0.0.1 by us): theirs wins
+            general = '<Interfaces><NetworkInterface address="127.0.0.1"/></Interfaces>' + general
         peers = ["127.0.0.1", *peers]
     elif scope == "OFF":
         general = "<AllowMulticast>false</AllowMulticast>"
@@ -83,16 +83,52 @@ def cyclone_config(env: Mapping[str, str] = os.environ) -> str:
         )
     if peers:
         discovery += "<Peers>" + "".join(f'<Peer address="{_xml_attr(p)}"/>' for p in peers) + "</Peers>"
-    parts = []
-    if general or discovery:
-        body = (f"<General>{general}</General>" if general else "") + (
-            f"<Discovery>{discovery}</Discovery>" if discovery else ""
-        )
-        parts.append(f'<CycloneDDS><Domain Id="any">{body}</Domain></CycloneDDS>')
+    body = (f"<General>{general}</General>" if general else "") + (
+        f"<Discovery>{discovery}</Discovery>" if discovery else ""
+    )
+    # Fast DDS 3 (Kilted) announces type objects with try_construct 0, which Cyclone rejects as invalid
+    # and then never matches those endpoints (ros_discovery_info, services, actions); accept them
+    body += "<Compatibility><AllowInvalidTryConstruct>true</AllowInvalidTryConstruct></Compatibility>"
+    parts = [f'<CycloneDDS><Domain Id="any">{body}</Domain></CycloneDDS>']
     user = env.get("CYCLONEDDS_URI", "").strip()
     if user:
         parts.append(user)
     return ",".join(parts)
+
+
+def _user_selects_interfaces(uri: str) -> bool:
+    """Whether CYCLONEDDS_URI (inline XML, file:// URIs or paths, comma-separated) names interfaces."""
+    for part in (p.strip() for p in uri.split(",")):
+        text = part
+        if not part.startswith("<"):
+            path = part.removeprefix("file://")
+            try:
+                with open(os.path.expandvars(path), encoding="utf-8", errors="replace") as handle:
+                    text = handle.read()
+            except OSError:
+                continue
+        lowered = text.lower()
+        if "<interfaces" in lowered or "<networkinterfaceaddress" in lowered:
+            return True
+    return False
+
+
+def silence_cyclone_log() -> None:
+    """Cyclone prints its own errors and warnings on stderr (for instance about the XTypes type objects
+    Fast DDS 3 announces); rostool reports what matters to the user in its own words, so only Cyclone's
+    fatal errors stay. There is no Python API for the log mask: call the C one in the library the binding
+    loaded (the wheel ships a second libddsc that would keep its own mask)."""
+    import ctypes
+
+    import cyclonedds._clayer  # noqa: F401  (loads libddsc)
+
+    with contextlib.suppress(OSError), open("/proc/self/maps", encoding="utf-8") as maps:
+        paths = {line.split()[-1] for line in maps if "/libddsc" in line}
+        for path in paths:
+            ctypes.CDLL(path).dds_set_log_mask(ctypes.c_uint32(DDS_LC_FATAL))
+
+
+DDS_LC_FATAL = 1
 
 
 # --- QoS -------------------------------------------------------------------------------------------
@@ -219,6 +255,8 @@ def from_dds_qos(qos: Any) -> QosProfile:
         dur = "transient_local"
     else:
         dur = str(getattr(durability, "__name__", durability)).lower()
+    if history is None:  # not announced (Fast DDS never sends it): unknown, as ros2cli shows it
+        return QosProfile(rel, dur, None)
     depth = getattr(history, "depth", 0 if history is Policy.History.KeepAll else 1)
     return QosProfile(rel, dur, int(depth))
 
@@ -249,6 +287,7 @@ class Participant:
         self.domain_id = domain_id(env)
         self.range = discovery_range(env)
         config = cyclone_config(env)
+        silence_cyclone_log()
         try:
             self._domain = Domain(self.domain_id, config) if config else None
             self.dp = DomainParticipant(self.domain_id, qos=Qos(Policy.Userdata(data=b"enclave=/;")))

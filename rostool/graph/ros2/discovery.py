@@ -13,7 +13,7 @@ import struct
 import threading
 import time
 from collections.abc import Iterable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 from rostool.graph.ros2 import dds
@@ -22,6 +22,8 @@ from rostool.graph.ros2.names import from_dds_topic, from_dds_type
 DISCOVERY_TOPIC = "ros_discovery_info"
 DISCOVERY_TYPE = "rmw_dds_common/msg/ParticipantEntitiesInfo"
 UNKNOWN_NODE = "_NODE_NAME_UNKNOWN_"  # what ros2cli prints for endpoints no node claims
+EPROSIMA = b"\x01\x0f"  # the vendor id that starts a Fast DDS participant's GUID prefix
+ENDPOINTS_GRACE = 4.0  # seconds a participant may take to describe itself (Fast DDS: two heartbeats)
 
 
 @dataclass
@@ -185,6 +187,7 @@ class GraphCache:
         self._subscriptions_reader = BuiltinDataReader(dp, BuiltinTopicDcpsSubscription)
         self._info_reader = info_reader
         self.participants: dict[bytes, bytes] = {}  # GUID -> USER_DATA
+        self.first_seen: dict[bytes, float] = {}
         self.endpoints: dict[bytes, Endpoint] = {}
         self.nodes: dict[bytes, list[NodeEntry]] = {}  # participant GUID -> its nodes
         self.started = time.monotonic()
@@ -203,6 +206,7 @@ class GraphCache:
                     continue
                 if key not in self.participants:
                     changed = True
+                    self.first_seen.setdefault(key, time.monotonic())
                 self.participants[key] = dds.user_data_of(sample.qos) if sample.qos is not None else b""
             for reader, is_writer in ((self._publications_reader, True), (self._subscriptions_reader, False)):
                 for sample in self._take(reader):
@@ -212,9 +216,13 @@ class GraphCache:
                         continue
                     if key in self.endpoints or sample.qos is None:
                         continue
+                    participant = sample.participant_key.bytes
+                    qos = dds.from_dds_qos(sample.qos)
+                    if participant.startswith(EPROSIMA):  # Fast DDS never announces its history depth
+                        qos = replace(qos, depth=None)
                     self.endpoints[key] = Endpoint(
-                        key, sample.participant_key.bytes, sample.topic_name, sample.type_name,
-                        dds.from_dds_qos(sample.qos), dds.user_data_of(sample.qos), is_writer,
+                        key, participant, sample.topic_name, sample.type_name, qos,
+                        dds.user_data_of(sample.qos), is_writer,
                     )  # fmt: skip
                     changed = True
             changed |= self._poll_info()
@@ -252,16 +260,47 @@ class GraphCache:
                 return found
             found.extend(batch)
 
-    def settle(self, minimum: float = 0.5, quiet: float = 0.3, maximum: float = 3.0) -> bool:
-        """Wait until discovery has been quiet for a while; True when any other participant was found."""
+    def settle(
+        self, minimum: float = 0.5, quiet: float = 0.3, maximum: float = 3.0, nodes: bool = False
+    ) -> bool:
+        """Wait until every participant found has announced its endpoints (and, with `nodes`, its
+        ros_discovery_info) and discovery has been quiet for a while; True when any other participant was
+        found. A participant that is seen is not yet described: Fast DDS answers Cyclone's first
+        request for its endpoints only on its next heartbeat (about 1 s later) and sends ros_discovery_info
+        on the heartbeat after that (up to 3 s), so waiting for quiet alone returns an empty graph."""
         while True:
             self.poll()
             now = time.monotonic()
             elapsed = now - self.started
             remote = any(key != self.own for key in self.participants)
-            if elapsed >= maximum or (remote and elapsed >= minimum and now - self.changed >= quiet):
+            if elapsed >= maximum:
+                return remote
+            # each participant's endpoints come in one burst per SEDP writer, so once every participant
+            # has shown both kinds a short quiet spell is enough
+            if remote and elapsed >= minimum and now - self.changed >= quiet / 3 and self._described(nodes):
                 return remote
             time.sleep(0.05)
+
+    def _described(self, nodes: bool) -> bool:
+        """Every ROS 2 participant has both a reader and a writer (rmw creates ros_discovery_info's pair
+        before any node), so one that shows only one kind yet is still being described; a bare DDS
+        participant is waited for at most ENDPOINTS_GRACE seconds."""
+        with self._lock:
+            kinds: dict[bytes, set[bool]] = {}
+            announcers = set()
+            for endpoint in self.endpoints.values():
+                kinds.setdefault(endpoint.participant, set()).add(endpoint.is_writer)
+                if endpoint.is_writer and endpoint.dds_topic == DISCOVERY_TOPIC:
+                    announcers.add(endpoint.participant)
+            now = time.monotonic()
+            for participant in self.participants:
+                if participant == self.own or now - self.first_seen.get(participant, now) > ENDPOINTS_GRACE:
+                    continue
+                if len(kinds.get(participant, ())) < 2:
+                    return False
+                if nodes and participant in announcers and participant not in self.nodes:
+                    return False
+            return True
 
     # --- queries ---------------------------------------------------------------------------------
     def remote_endpoints(self) -> list[Endpoint]:
