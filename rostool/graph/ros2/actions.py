@@ -28,7 +28,7 @@ from rostool.errors import RostoolError
 from rostool.graph.ros2 import dds
 from rostool.graph.ros2.definitions import action_types
 from rostool.graph.ros2.names import resolve, topic_to_dds
-from rostool.graph.ros2.services import ServiceClient
+from rostool.graph.ros2.services import ServiceClient, remote_writer_known
 
 if TYPE_CHECKING:
     from rostool.graph.ros2.graph import Ros2Graph, Session
@@ -52,6 +52,7 @@ CANCEL_ERRORS = {1: "the server rejected the cancel request", 2: "the server doe
 
 ACTION_DEFINITIONS: dict[str, str] = {
     "example_interfaces/action/Fibonacci": "int32 order\n---\nint32[] sequence\n---\nint32[] sequence\n",
+    "test_msgs/action/Fibonacci": "int32 order\n---\nint32[] sequence\n---\nint32[] sequence\n",
 }
 
 
@@ -171,9 +172,9 @@ class ActionClient:
         self._send_goal = ServiceClient(session, base + "send_goal", self.types.send_goal)
         self._get_result = ServiceClient(session, base + "get_result", self.types.get_result)
         self._cancel = ServiceClient(session, base + "cancel_goal", CANCEL_SERVICE)
-        self._feedback = session.reader(
-            topic_to_dds(base + "feedback"), self.types.feedback_message, FEEDBACK_QOS
-        )
+        self._session = session
+        self._feedback_topic = topic_to_dds(base + "feedback")
+        self._feedback: Any = None  # created once Cyclone knows the server's feedback writer
 
     def build_goal(self, value: Any) -> Any:
         from rostool.interfaces.fill import FillError, build_message
@@ -189,7 +190,13 @@ class ActionClient:
         for client in (self._send_goal, self._get_result, self._cancel):
             if not client.wait_for_server(max(deadline - time.monotonic(), 0.0)):
                 return False
-        while self._feedback.get_subscription_matched_status().current_count == 0:
+        while self._feedback is None or self._feedback.get_subscription_matched_status().current_count == 0:
+            if self._feedback is None and remote_writer_known(self._session, self._feedback_topic):
+                # only now: a Fast DDS writer's first heartbeat must reach a reader Cyclone already
+                # matched, or the first feedback is taken for history and dropped (see services.py)
+                self._feedback = self._session.reader(
+                    self._feedback_topic, self.types.feedback_message, FEEDBACK_QOS
+                )
             if time.monotonic() >= deadline:
                 return False
             time.sleep(0.02)
@@ -214,7 +221,7 @@ class ActionClient:
         request = build_message(
             self._store.store, self.types.get_result + "_Request", {"goal_id": {"uuid": list(goal_id)}}
         )
-        return self._get_result.call(request, timeout)
+        return self._get_result.call(request, timeout, forever=True)
 
     def cancel(self, goal_id: bytes, timeout: float = 5.0) -> Any:
         from rostool.interfaces.fill import build_message
@@ -227,7 +234,9 @@ class ActionClient:
         """Feedback messages for `goal_id` received since the last call."""
         from cyclonedds._clayer import ddspy_take  # type: ignore[import-not-found]
 
-        found = []
+        found: list[Any] = []
+        if self._feedback is None:
+            return found
         samples = ddspy_take(self._feedback._ref, _ANY_SAMPLE, 256)
         for data, info in [] if isinstance(samples, int) else samples:
             if not info.valid_data:

@@ -6,6 +6,7 @@ file layout of `ros2 param dump` and rcl: `/node: ros__parameters: {name: value}
 
 from __future__ import annotations
 
+import time
 from typing import Any
 
 from rostool.errors import RostoolError
@@ -24,6 +25,7 @@ _FIELDS = {
     DOUBLE_ARRAY: "double_array_value", STRING_ARRAY: "string_array_value",
 }  # fmt: skip
 VALUE_TYPE = "rcl_interfaces/msg/ParameterValue"
+NODE_SETTLE_SECONDS = 3.0  # how long discovery may take to show the node's services
 
 
 def to_python(value: Any) -> Any:
@@ -101,18 +103,40 @@ class ParameterClient:
         from rostool.graph.ros2.services import ServiceClient
 
         client = self._clients.get(verb)
-        if not self._clients and self.node not in self._graph.node_names():
-            raise RostoolError(f"unknown node {self.node}: no ROS 2 participant announces it")
         if client is None:
+            if not self._clients:
+                self._check_node()
             srv_type = "rcl_interfaces/srv/" + "".join(w.capitalize() for w in verb.split("_"))
             client = self._clients[verb] = ServiceClient(self._graph.session, f"{self.node}/{verb}", srv_type)
         if not client.wait_for_server(self._timeout):
             raise RostoolError(
-                f"node {self.node} does not serve {verb} (no such node, or it runs without parameter "
-                "services; see `rostool node list`)"
+                f"node {self.node} does not serve {verb}: no server of {client.service} matched within "
+                f"{self._timeout:g} s (see `rostool service list`)"
             )
         store = self._graph.types.store
         return client.call(build_message(store, client.request_type, request), self._timeout)
+
+    def _check_node(self) -> None:
+        """Fail at once, after discovery settles, when no participant serves any `<node>/...` service.
+        Service endpoints come with DDS discovery; the node names of ros_discovery_info may come later."""
+        from rostool.graph.ros2.names import request_topic
+
+        cache = self._graph.session.cache
+        prefix = request_topic(self.node + "/").removesuffix("Request")
+        deadline = time.monotonic() + NODE_SETTLE_SECONDS
+        while True:
+            cache.poll()
+            if any(e.dds_topic.startswith(prefix) and not e.is_writer for e in cache.remote_endpoints()):
+                return
+            if time.monotonic() >= deadline:
+                break
+            time.sleep(0.05)
+        if any(node.full_name == self.node for node in cache.node_entries()):
+            raise RostoolError(f"node {self.node} serves no parameter services (it was started without them)")
+        raise RostoolError(
+            f"unknown node {self.node}: no ROS 2 participant serves its parameter services "
+            "(see `rostool node list`)"
+        )
 
     def names(self) -> list[str]:
         response = self._call("list_parameters", {"depth": 0})

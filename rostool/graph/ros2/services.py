@@ -1,14 +1,29 @@
-"""ROS 2 services over DDS as rmw_cyclonedds_cpp carries them (Cyclone peers only).
+"""ROS 2 services over DDS, with the request/reply convention of the server's RMW.
 
 A service `/add` is two DDS topics: requests on `rq/addRequest` (type `pkg::srv::dds_::Add_Request_`) and
-replies on `rr/addReply` (`pkg::srv::dds_::Add_Response_`). rmw_cyclonedds_cpp serializes a
-`cdds_request_header_t {uint64 guid; int64 seq;}` into the CDR stream in front of the message fields
-(serdata.cpp, `is_request_header`), in requests and in replies alike: the client picks the guid (its
-writer's instance handle), the server copies the header into its reply, and every client filters the reply
-topic for its own guid. The header is 16 bytes, so the message fields keep their CDR alignment. Fast DDS
-uses a different header, so its services do not interoperate with Cyclone's (a ROS 2 limit, not ours).
-The DDS types rostool registers for service topics carry the header as two leading members (see
-`TypeSupport._with_request_header` for why, and which peers that excludes).
+replies on `rr/addReply` (`pkg::srv::dds_::Add_Response_`). The two RMWs rostool meets pair a reply with
+its request differently, and the client picks the convention of the server it found, by the vendor id
+that starts the server participant's GUID prefix (01.10 Eclipse Cyclone DDS, 01.0f eProsima Fast DDS):
+
+- rmw_cyclonedds_cpp serializes a `cdds_request_header_t {uint64 guid; int64 seq;}` into the CDR stream in
+  front of the message fields (serdata.cpp, `is_request_header`), in requests and in replies alike: the
+  client picks the guid, the server copies the header into its reply, and every client filters the reply
+  topic for its own guid. The header is 16 bytes, so the message fields keep their CDR alignment. The DDS
+  types rostool registers for these topics carry the header as two leading members (see
+  `TypeSupport._with_request_header` for why, and which peers that excludes).
+- rmw_fastrtps_cpp puts nothing in the payload: the server takes the request's RTPS sample identity
+  (writer GUID, sequence number) and sends it back as the reply's `related_sample_identity` inline QoS,
+  by which rmw_fastrtps clients filter. Cyclone DDS neither sets nor shows that identity, so a rostool
+  client of a Fast DDS server has one request outstanding at a time (calls through one client are
+  serialized) and takes the first reply that arrives after its request as the answer. The server's reply
+  writer sends every reply to every matched reader, so another client calling the same server at that very
+  moment could have its reply taken instead: a limit of talking Fast DDS's convention through Cyclone.
+
+Cyclone accepts data from a non-Cyclone reliable writer only after the writer's first HEARTBEAT, and
+treats everything that heartbeat announces as history a volatile reader must not get. Fast DDS sends that
+first heartbeat right before the reply when nothing came earlier, and the reply was lost (found on Jazzy
+and Kilted). So the client creates its reply reader only once Cyclone knows the server's reply writer:
+the heartbeat Fast DDS sends when it matches the new reader is then accepted, and replies come after it.
 
 rosbags' type stores hold messages only; the service types rostool itself needs are defined here from their
 .srv text (rcl_interfaces parameter services, example_interfaces/AddTwoInts); others come from .srv files
@@ -17,6 +32,7 @@ in the interface sources (see definitions.py).
 
 from __future__ import annotations
 
+import math
 import random
 import struct
 import threading
@@ -96,60 +112,161 @@ def _join(guid: int, seq: int, cdr: bytes) -> bytes:
     return cdr[:4] + struct.pack(order + "Qq", guid, seq) + cdr[4:]
 
 
+ECLIPSE_VENDOR = b"\x01\x10"  # GUID prefix of Cyclone DDS participants (rmw_cyclonedds_cpp, rostool)
+DEFAULT_REPLY_TIMEOUT = 30.0  # a call given no timeout (inf) still ends after this long without a reply
+_GONE_CHECK = 1.0  # a call without a deadline checks this often that its server is still matched
+
+
+def remote_writer_known(session: Any, dds_topic: str) -> bool:
+    """Has discovery shown a writer of `dds_topic` in another participant (Cyclone then has its proxy)?"""
+    cache = session.cache
+    cache.poll()
+    return any(e.dds_topic == dds_topic and e.is_writer for e in cache.remote_endpoints())
+
+
+class ServiceTimeout(RostoolError):
+    """No reply within the call's timeout."""
+
+
 class ServiceClient:
-    """Calls one service; `call` waits until a server has matched both topics."""
+    """Calls one service. `wait_for_server` (which `call` does first) finds a server in discovery, picks
+    its convention (see the module's docstring) and creates the DDS reader and writer, then waits until
+    both have matched it."""
 
     def __init__(self, session: Any, service: str, srv_type: str) -> None:
         self._session = session
         self._types: TypeSupport = session.types
         self.service = service
         self.request_type, self.response_type = register_service(self._types, srv_type)
-        self._writer = session.writer(request_topic(service), self.request_type, SERVICE_QOS, True)
-        self._reader = session.reader(reply_topic(service), self.response_type, SERVICE_QOS, True)
+        self._writer: Any = None
+        self._reader: Any = None
+        self.header: bool | None = None  # True: rmw_cyclonedds_cpp's in-payload header; None: no server yet
         self._guid = random.getrandbits(63) or 1
         self._seq = 0
         self._lock = threading.Lock()
 
+    def _server(self) -> bytes | None:
+        """The participant GUID of a discovered server: one with a reader of our request topic and a writer
+        of our reply topic (Cyclone then knows that writer, see the module's docstring)."""
+        cache = self._session.cache
+        cache.poll()
+        readers: set[bytes] = set()
+        writers: set[bytes] = set()
+        wanted_request, wanted_reply = request_topic(self.service), reply_topic(self.service)
+        for endpoint in cache.remote_endpoints():
+            if endpoint.dds_topic == wanted_request and not endpoint.is_writer:
+                readers.add(endpoint.participant)
+            elif endpoint.dds_topic == wanted_reply and endpoint.is_writer:
+                writers.add(endpoint.participant)
+        both = sorted(readers & writers)
+        return both[0] if both else None
+
+    def _open(self, server: bytes) -> None:
+        header = server[:2] == ECLIPSE_VENDOR
+        replies, requests = reply_topic(self.service), request_topic(self.service)
+        for dds_name, store_name in ((replies, self.response_type), (requests, self.request_type)):
+            topic = self._session.topic(dds_name, store_name, header)
+            if getattr(topic, "data_type", None) is not self._types.idl_class(store_name, header):
+                other = "rmw_cyclonedds_cpp's" if not header else "rmw_fastrtps_cpp's"
+                raise RostoolError(
+                    f"this process already talks to {self.service} with {other} request/reply convention "
+                    "and cannot use the other one too: call the other server from a second rostool"
+                )
+        # the reader first: see the module's docstring
+        self._reader = self._session.reader(replies, self.response_type, SERVICE_QOS, header)
+        self._writer = self._session.writer(requests, self.request_type, SERVICE_QOS, header)
+        self.header = header
+
+    def _matched(self) -> bool:
+        return bool(
+            self._writer.get_publication_matched_status().current_count > 0
+            and self._reader.get_subscription_matched_status().current_count > 0
+        )
+
     def wait_for_server(self, timeout: float) -> bool:
         deadline = time.monotonic() + timeout
         while True:
-            writer_ok = self._writer.get_publication_matched_status().current_count > 0
-            reader_ok = self._reader.get_subscription_matched_status().current_count > 0
-            if writer_ok and reader_ok:
+            if self._writer is None:
+                server = self._server()
+                if server is not None:
+                    self._open(server)
+            if self._writer is not None and self._matched():
                 return True
             if time.monotonic() >= deadline:
                 return False
             time.sleep(0.02)
 
-    def call(self, request: object, timeout: float = 5.0) -> Any:
-        from cyclonedds._clayer import ddspy_take, ddspy_write  # type: ignore[import-not-found]
-
-        if not self.wait_for_server(timeout):
+    def call(self, request: object, timeout: float = 5.0, forever: bool = False) -> Any:
+        """The server's reply to `request`. `timeout` covers finding the server and the reply; an infinite
+        one is `DEFAULT_REPLY_TIMEOUT` unless `forever` (then the call ends only when the reply comes or
+        the server goes away)."""
+        if math.isinf(timeout) and not forever:
+            timeout = DEFAULT_REPLY_TIMEOUT
+        started = time.monotonic()
+        if not self.wait_for_server(min(timeout, DEFAULT_REPLY_TIMEOUT)):
             raise RostoolError(
-                f"service {self.service} is not available (no server matched within {timeout:g} s)"
+                f"service {self.service} is not available: no server matched within "
+                f"{min(timeout, DEFAULT_REPLY_TIMEOUT):g} s (see `rostool service list`; --wait waits longer)"
             )
         with self._lock:
-            self._seq += 1
-            seq = self._seq
-            payload = _join(self._guid, seq, self._types.serialize(request, self.request_type))
-            if ddspy_write(self._writer._ref, payload) < 0:
-                raise RostoolError(f"DDS write of a request to {self.service} failed")
-            deadline = time.monotonic() + timeout
-            while time.monotonic() < deadline:
-                samples = ddspy_take(self._reader._ref, _ANY_SAMPLE, 64)
-                for data, info in [] if isinstance(samples, int) else samples:
-                    if not info.valid_data:
-                        continue
-                    guid, got_seq, cdr = _split(data)
-                    if guid == self._guid and got_seq == seq:
-                        return self._types.deserialize(cdr, self.response_type)
-                time.sleep(0.005)
-        raise RostoolError(f"service {self.service} did not reply within {timeout:g} s")
+            return self._exchange(request, started + timeout, timeout)
+
+    def _exchange(self, request: object, deadline: float, timeout: float) -> Any:
+        from cyclonedds._clayer import ddspy_take, ddspy_write  # type: ignore[import-not-found]
+
+        payload = self._types.serialize(request, self.request_type)
+        self._seq += 1
+        seq = self._seq
+        if self.header:
+            payload = _join(self._guid, seq, payload)
+        else:
+            self._take_all()  # a late reply to an earlier call must not pass for this one's
+        if ddspy_write(self._writer._ref, payload) < 0:
+            raise RostoolError(f"DDS write of a request to {self.service} failed")
+        next_check = time.monotonic() + _GONE_CHECK
+        while time.monotonic() < deadline:
+            samples = ddspy_take(self._reader._ref, _ANY_SAMPLE, 64)
+            for data, info in [] if isinstance(samples, int) else samples:
+                if not info.valid_data:
+                    continue
+                if not self.header:
+                    return self._types.deserialize(data, self.response_type)
+                guid, got_seq, cdr = _split(data)
+                if guid == self._guid and got_seq == seq:
+                    return self._types.deserialize(cdr, self.response_type)
+            if time.monotonic() >= next_check:
+                next_check = time.monotonic() + _GONE_CHECK
+                if not self._matched():
+                    raise RostoolError(
+                        f"the server of {self.service} went away before it replied (see `rostool service "
+                        "list`); call again when it is back"
+                    )
+            time.sleep(0.005)
+        raise ServiceTimeout(self._timeout_text(timeout))
+
+    def _timeout_text(self, timeout: float) -> str:
+        text = f"service {self.service} did not reply within {timeout:g} s"
+        if self.header is False:
+            text += (
+                " (a Fast DDS server; if another client called it at the same moment, call again: replies "
+                "cannot be told apart through Cyclone DDS)"
+            )
+        return text + "; give a longer --timeout if the service is slow"
+
+    def _take_all(self) -> None:
+        from cyclonedds._clayer import ddspy_take  # type: ignore[import-not-found]
+
+        while True:
+            samples = ddspy_take(self._reader._ref, _ANY_SAMPLE, 64)
+            if isinstance(samples, int) or not samples:
+                return
 
     def close(self) -> None:
         """Delete this client's request writer and reply reader (a one-off call leaves nothing behind)."""
-        self._session.drop(self._writer)
-        self._session.drop(self._reader)
+        for endpoint in (self._writer, self._reader):
+            if endpoint is not None:
+                self._session.drop(endpoint)
+        self._writer = self._reader = None
 
 
 class ServiceServer:

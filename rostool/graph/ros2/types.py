@@ -188,6 +188,7 @@ class TypeSupport:
             store_name.replace("/", "_"), (IdlStruct,), {"typename": type_to_dds(store_name)}, body
         )
         final(cls)
+        _set_type_information(cls)
         return cls
 
     def _field_type(self, desc: Any) -> Any:
@@ -206,6 +207,56 @@ class TypeSupport:
         if kind == Nodetype.ARRAY:
             return t.array[inner, length]  # type: ignore[misc]
         return t.sequence[inner, length] if length else t.sequence[inner]  # type: ignore[misc]
+
+
+_builder: Any = None  # the type-information builder; False: cyclonedds-python's own
+
+
+def _set_type_information(cls: Any) -> None:
+    """Give `cls` the XTypes type information (TypeInformation and TypeMapping) Cyclone announces, built
+    as Fast DDS 3 (Kilted) builds it for ROS types: elements of plain sequences and arrays carry no member
+    flags (cyclonedds-python sets TRY_CONSTRUCT1 there). Equal type identifiers match at once; different
+    ones make Cyclone fetch the peer's type objects and check assignability, which took seconds or never
+    ended (Cyclone rejects Fast DDS 3's type objects unless AllowInvalidTryConstruct, see dds.py).
+    Checked against Kilted's announced identifiers of rcl_interfaces, std_srvs and action types."""
+    global _builder
+    from cyclonedds.idl._support import Endianness
+
+    from rostool.graph.ros2.dds import cyclone_config
+
+    if _builder is None:
+        # Cyclone validates our own type objects too: flags of 0 need AllowInvalidTryConstruct
+        accepted = "<AllowInvalidTryConstruct>true</AllowInvalidTryConstruct>" in cyclone_config()
+        _builder = _make_builder() if accepted else False
+    if not _builder:
+        return
+    idl = cls.__idl__
+    idl.populate()
+    info, mapping = _builder.process_type(cls)
+    idl._xt_data = (info, mapping)
+    idl._xt_bytedata = (
+        info.serialize(endianness=Endianness.Little, use_version_2=True)[4:],
+        mapping.serialize(endianness=Endianness.Little, use_version_2=True)[4:],
+    )
+
+
+def _make_builder() -> Any:
+    from cyclonedds.idl import _xt_builder as xb
+
+    xt = xb.xt
+
+    class RosXTBuilder(xb.XTBuilder):  # type: ignore[misc]
+        _type_hash_db: dict[Any, Any] = {}  # noqa: RUF012 - its own cache, not the base class's
+
+        @classmethod
+        def _xt_type_identifier(cls, name: str, entity: Any, minimal: bool) -> Any:
+            found = super()._xt_type_identifier(name, entity, minimal)
+            header = getattr(found.value, "header", None)
+            if isinstance(header, xt.PlainCollectionHeader):
+                header.element_flags = xt.MemberFlag()
+            return found
+
+    return RosXTBuilder
 
 
 def _nested_type(desc: Any) -> tuple[str | None, bool]:
