@@ -7,6 +7,7 @@ every ROS 2 test. It takes roles from its arguments and reports what it sees as 
     {"event": "goal", "order": 5} / "cancel" / "done"    --action: test_msgs/Fibonacci server
     {"event": "param", "name": N, "value": V}            --params: each accepted parameter change
     {"event": "graph", ...}                              --watch: this node's view of the graph
+    {"event": "published", "count": N, "t": T}           --talk: about once a second (monotonic time)
 
 Not a pytest module: tests start it through tests/ros2_peers.py.
 """
@@ -33,7 +34,7 @@ EVERY_TYPE = {
     "count": 3,
     "speed": 0.5,
     "label": "r2",
-    "blob": b"\x01\x02",
+    "blob": [b"\x01", b"\x02"],  # rclpy takes a byte array as a list of single bytes
     "switches": [True, False],
     "ids": [1, 2, 3],
     "gains": [0.1, 0.2],
@@ -61,6 +62,7 @@ class Peer(Node):
     def __init__(self, args: argparse.Namespace) -> None:
         super().__init__(args.name, namespace=args.namespace)
         self.count = 0
+        self.reported = time.monotonic()
         if args.talk:
             from std_msgs.msg import String
 
@@ -72,6 +74,13 @@ class Peer(Node):
             self.publisher = self.create_publisher(String, args.talk, qos)
             self.message = String()
             self.create_timer(1.0 / args.rate, self.tick)
+        if args.stamped:
+            from geometry_msgs.msg import PointStamped
+
+            self.stamped = self.create_publisher(PointStamped, args.stamped, 10)
+            self.point = PointStamped()
+            self.point.header.frame_id = "map"
+            self.create_timer(1.0 / args.rate, self.tick_stamped)
         for topic in args.listen:
             from std_msgs.msg import String
 
@@ -99,6 +108,15 @@ class Peer(Node):
         self.count += 1
         self.message.data = f"hello {self.count}"
         self.publisher.publish(self.message)
+        now = time.monotonic()
+        if now - self.reported >= 1.0:
+            self.reported = now
+            emit("published", count=self.count, t=now)
+
+    def tick_stamped(self) -> None:
+        self.point.header.stamp = self.get_clock().now().to_msg()
+        self.point.point.x += 1.0
+        self.stamped.publish(self.point)
 
     def on_params(self, parameters: list) -> None:
         for parameter in parameters:
@@ -161,6 +179,7 @@ def main() -> None:
     parser.add_argument("--name", default="peer")
     parser.add_argument("--namespace", default="")
     parser.add_argument("--talk", help="publish std_msgs/String 'hello N' on this topic")
+    parser.add_argument("--stamped", help="publish geometry_msgs/PointStamped (stamp = now, x = 1, 2, ...)")
     parser.add_argument("--rate", type=float, default=10.0)
     parser.add_argument("--depth", type=int, default=10)
     parser.add_argument("--best-effort", action="store_true")
