@@ -146,3 +146,14 @@ def test_bad_input_on_a_real_graph(graph_env: dict[str, str], start_peer: Start)
         assert len(lines) == 1 and words in lines[0], (args, done.stderr)
         assert "Traceback" not in done.stderr
 
+
+
+def test_a_users_cyclonedds_uri_choosing_lo_wins(graph_env: dict[str, str], start_peer: Start) -> None:
+    """A common set-up: LOCALHOST discovery and a CYCLONEDDS_URI that selects interface `lo` (Cyclone
+    refuses an interface selected twice, so rostool leaves the interfaces to the user's file)."""
+    start_peer("--name", "talker", "--talk", "/chatter", "--rate", "20")
+    interfaces = '<Interfaces><NetworkInterface name="lo"/></Interfaces>'
+    uri = f'<CycloneDDS><Domain Id="any"><General>{interfaces}</General></Domain></CycloneDDS>'
+    echo = rostool(["topic", "echo", "/chatter", "-n", "1", "--json"], {**graph_env, "CYCLONEDDS_URI": uri})
+    assert echo.returncode == 0, echo.stderr
+    assert json.loads(echo.stdout)["data"].startswith("hello ")
