@@ -8,6 +8,8 @@ every ROS 2 test. It takes roles from its arguments and reports what it sees as 
     {"event": "param", "name": N, "value": V}            --params: each accepted parameter change
     {"event": "graph", ...}                              --watch: this node's view of the graph
     {"event": "published", "count": N, "t": T}           --talk: about once a second (monotonic time)
+    {"event": "sent", "count": N, "seconds": S}          --talk with --count: after the burst
+    {"event": "counted", "count": N, "first": T, "last": T}  --raw-count: every 0.5 s
 
 Not a pytest module: tests start it through tests/ros2_peers.py.
 """
@@ -23,7 +25,7 @@ import time
 
 import rclpy
 from rclpy.action import ActionServer, CancelResponse
-from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
+from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
@@ -73,7 +75,10 @@ class Peer(Node):
                 qos.durability = DurabilityPolicy.TRANSIENT_LOCAL
             self.publisher = self.create_publisher(String, args.talk, qos)
             self.message = String()
-            self.create_timer(1.0 / args.rate, self.tick)
+            if args.count:
+                threading.Thread(target=self.burst, args=(args,), daemon=True).start()
+            else:
+                self.create_timer(1.0 / args.rate, self.tick)
         if args.stamped:
             from geometry_msgs.msg import PointStamped
 
@@ -81,6 +86,14 @@ class Peer(Node):
             self.point = PointStamped()
             self.point.header.frame_id = "map"
             self.create_timer(1.0 / args.rate, self.tick_stamped)
+        if args.raw_count:
+            from std_msgs.msg import String
+
+            self.counted = 0
+            self.first = self.last = 0.0
+            qos = QoSProfile(depth=args.depth)
+            self.create_subscription(String, args.raw_count, self.on_raw, qos, raw=True)
+            self.create_timer(0.5, self.report_count)
         for topic in args.listen:
             from std_msgs.msg import String
 
@@ -112,6 +125,32 @@ class Peer(Node):
         if now - self.reported >= 1.0:
             self.reported = now
             emit("published", count=self.count, t=now)
+
+    def burst(self, args: argparse.Namespace) -> None:
+        """--count N: once --subs subscribers matched, N messages at --rate (0: as fast as possible)."""
+        while self.publisher.get_subscription_count() < args.subs:
+            time.sleep(0.05)
+        time.sleep(1.0)
+        period = 1.0 / args.rate if args.rate else 0.0
+        start = time.perf_counter()
+        for i in range(args.count):
+            if period:
+                delay = start + i * period - time.perf_counter()
+                if delay > 0:
+                    time.sleep(delay)
+            self.message.data = f"hello {i}"
+            self.publisher.publish(self.message)
+        emit("sent", count=args.count, seconds=time.perf_counter() - start)
+
+    def on_raw(self, _payload: bytes) -> None:
+        now = time.monotonic()
+        if not self.counted:
+            self.first = now
+        self.counted += 1
+        self.last = now
+
+    def report_count(self) -> None:
+        emit("counted", count=self.counted, first=self.first, last=self.last)
 
     def tick_stamped(self) -> None:
         self.point.header.stamp = self.get_clock().now().to_msg()
@@ -184,6 +223,9 @@ def main() -> None:
     parser.add_argument("--depth", type=int, default=10)
     parser.add_argument("--best-effort", action="store_true")
     parser.add_argument("--latched", action="store_true")
+    parser.add_argument("--count", type=int, help="with --talk: publish N messages, then idle")
+    parser.add_argument("--subs", type=int, default=1, help="with --count: subscribers to wait for")
+    parser.add_argument("--raw-count", help="count std_msgs/String here (raw=True, as ros2 topic hz)")
     parser.add_argument("--listen", action="append", default=[])
     parser.add_argument("--params", action="store_true", help="declare a parameter of every type")
     parser.add_argument("--service", help="serve std_srvs/srv/SetBool here")
@@ -193,7 +235,8 @@ def main() -> None:
     args = parser.parse_args()
     rclpy.init()
     node = Peer(args)
-    executor = MultiThreadedExecutor(num_threads=4)
+    # the counter runs as `ros2 topic hz` does (one thread); the servers need several
+    executor = SingleThreadedExecutor() if args.raw_count else MultiThreadedExecutor(num_threads=4)
     executor.add_node(node)
     emit("ready", node=node.get_fully_qualified_name())
     with contextlib.suppress(KeyboardInterrupt, ExternalShutdownException):
