@@ -37,9 +37,7 @@ from rosbags.interfaces import Connection, ConnectionExtRosbag1, ConnectionExtRo
 from rostool.bag.reader import BagReader
 from rostool.bag.schedule import PlayClock, sleep_until
 from rostool.errors import RostoolError
-from rostool.graph.ros1.graph import Ros1Graph
-from rostool.graph.ros1.names import resolve
-from rostool.graph.ros1.topics import Publisher
+from rostool.graph.base import Graph
 from rostool.interfaces.names import to_ros1_name
 from rostool.interfaces.ros1 import Ros1Type, builtin_store
 
@@ -103,13 +101,13 @@ class _Plan:
 
 
 def parse_remaps(values: Collection[str]) -> dict[str, str]:
-    """`/from:=/to` pairs (rosbag and ROS remapping syntax) with resolved names."""
+    """`/from:=/to` pairs (rosbag and ROS remapping syntax); the player resolves the names."""
     remaps = {}
     for value in values:
         source, sep, target = value.partition(":=")
         if not sep or not source or not target:
             raise RostoolError(f"bad remapping {value!r}: expected FROM:=TO, e.g. /chatter:=/talk")
-        remaps[resolve(source)] = resolve(target)
+        remaps[source] = target
     return remaps
 
 
@@ -194,7 +192,7 @@ class Player:
     def __init__(
         self,
         reader: BagReader,
-        graph: Ros1Graph,
+        graph: Graph,
         options: PlayOptions,
         console: Console | None = None,
         warn: Callable[[str], None] | None = None,
@@ -216,13 +214,14 @@ class Player:
         self._started = False
         self.total = (reader.end_ns - reader.start_ns) / 1e9 if reader.message_count else 0.0
         self.window = self._window()
-        self.connections = reader.select([resolve(t) for t in options.topics])
+        self.connections = reader.select([graph.resolve(t) for t in options.topics])
+        self.remap = {graph.resolve(name): graph.resolve(to) for name, to in options.remap.items()}
         self.pause_topics = self._pause_topics()
         self._pause_for_topics = bool(self.pause_topics)  # 't' toggles it
         self._skip_ns = None if options.skip_empty is None else round(options.skip_empty * 1e9)
 
     def _pause_topics(self) -> frozenset[str]:
-        names = frozenset(resolve(t) for t in self.options.pause_topics)
+        names = frozenset(self.graph.resolve(t) for t in self.options.pause_topics)
         unknown = sorted(names - {c.topic for c in self.connections})
         if unknown:
             raise RostoolError(
@@ -254,8 +253,8 @@ class Player:
     def _plan(self, conn: Connection) -> None:
         """Plan how `conn`'s messages are published, or skip its topic."""
         options = self.options
-        topic = resolve(options.prefix + conn.topic) if options.prefix else conn.topic
-        topic = options.remap.get(topic, topic)  # rosbag remaps the prefixed name
+        topic = self.graph.resolve(options.prefix + conn.topic) if options.prefix else conn.topic
+        topic = self.remap.get(topic, topic)  # rosbag remaps the prefixed name
         try:
             kind = self._kind_of(conn)
         except RostoolError as err:
@@ -278,14 +277,13 @@ class Player:
         return _Kind(
             key=msg_type.md5sum,
             label=msg_type.name,
-            advertise=lambda topic: self.graph.node.advertise(topic, msg_type, latch),
+            advertise=lambda topic: self.graph.raw_publisher(topic, msg_type, latch),
             convert=convert,
             verify=None if convert is None else msg_type.deserialize,
         )
 
     def _advertise_clock(self) -> RawPublisher:
-        publisher: Publisher = self.graph.node.advertise("/clock", self.types.builtin("rosgraph_msgs/Clock"))
-        return publisher
+        return self.graph.raw_publisher("/clock", self.types.builtin("rosgraph_msgs/Clock"))
 
     def _clock_message(self, stamp: int) -> bytes:
         """A rosgraph_msgs/Clock message of the graph's ROS version for bag time `stamp` (ns)."""

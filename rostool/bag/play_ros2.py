@@ -33,7 +33,7 @@ if TYPE_CHECKING:
     from rosbags.typesys.store import Typestore
 
     from rostool.bag.reader import BagReader
-    from rostool.graph.ros2.graph import Ros2Graph
+    from rostool.graph.base import Graph
 
 # Little-endian CDR encapsulation, then builtin_interfaces/Time (int32 sec, uint32 nanosec).
 _CDR_CLOCK = struct.Struct("<4siI")
@@ -47,19 +47,17 @@ class Ros2Player(Player):
     def __init__(
         self,
         reader: BagReader,
-        graph: Ros2Graph,
+        graph: Graph,
         options: PlayOptions,
         console: Console | None = None,
         warn: Callable[[str], None] | None = None,
     ) -> None:
-        # Player only touches the graph in _plan() and _advertise_clock(), which this class replaces.
-        super().__init__(reader, cast(Any, graph), options, console, warn)
-        self.ros2 = graph
+        super().__init__(reader, graph, options, console, warn)
         self._cdr_stores = CrossVersionStores(dst_version=2)
 
     def advertise(self) -> None:
         if self.reader.ros_version == 2:
-            self.ros2.types.register(self.reader.resolver.store.fielddefs)  # only what the distro lacks
+            self.types.register(self.reader.resolver.store.fielddefs)  # only what the distro lacks
         super().advertise()
 
     def _kind_of(self, conn: Connection) -> _Kind:
@@ -68,9 +66,9 @@ class Ros2Player(Player):
         return _Kind(
             key=type_name,
             label=type_name,
-            advertise=lambda topic: self.ros2.publisher(topic, type_name, latch),
+            advertise=lambda topic: self.graph.raw_publisher(topic, type_name, latch),
             convert=convert,
-            verify=None if convert is None else partial(self.ros2.types.deserialize, store_name=type_name),
+            verify=None if convert is None else partial(self.types.deserialize, store_name=type_name),
         )
 
     def _ros2_type_of(self, conn: Connection) -> tuple[str, Callable[[Any], Any] | None, bool]:
@@ -92,13 +90,13 @@ class Ros2Player(Player):
             raise RostoolError(resolver.missing_message(ros1_type))
         try:
             store = self._cdr_stores.store_for(resolver.store, ros1_type, type_name)
-            self.ros2.types.register(store.fielddefs)  # only the types the distro store lacks
+            self.types.register(store.fielddefs)  # only the types the distro store lacks
         except Exception as err:  # a definition rosbags cannot express in ROS 2
             raise RostoolError(f"{ros1_type} cannot be converted to ROS 2: {describe(err)}") from err
         return store
 
     def _advertise_clock(self) -> RawPublisher:
-        return self.ros2.publisher("/clock", "rosgraph_msgs/msg/Clock")
+        return self.graph.raw_publisher("/clock", "rosgraph_msgs/msg/Clock")
 
     def _clock_message(self, stamp: int) -> bytes:
         return _CDR_CLOCK.pack(_CDR_LE, *divmod(stamp, 1_000_000_000))

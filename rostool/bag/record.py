@@ -22,14 +22,15 @@ import threading
 import time
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
+from functools import partial
 from pathlib import Path
 from types import FrameType
 from typing import Any, Literal, Protocol
 
 from rostool.bag.crossver import CrossVersionStores
 from rostool.bag.ros1_writer import BagWriter, WriteFailed
-from rostool.bag.sources import RecordSource
 from rostool.errors import RostoolError
+from rostool.graph.recording import RecordSource
 
 Format = Literal["bag", "mcap", "db3"]
 SUFFIXES: dict[str, Format] = {".bag": "bag", ".mcap": "mcap", ".db3": "db3"}
@@ -191,8 +192,6 @@ class Ros1Sink:
     def _add(self, header: Mapping[str, str]) -> tuple[int, Callable[[bytes], Any] | None] | None:
         if self.source.encoding == "ros1":
             return self.writer.connection(header), None
-        from rostool.bag.sources import ros1_header_for_cdr
-
         try:
             ros1_header, convert = ros1_header_for_cdr(dict(header), self.source.store, self._stores)
         except Exception as err:  # a type rosbags cannot express in ROS 1
@@ -614,3 +613,23 @@ def stop_on_signals(stop: threading.Event) -> Iterator[None]:
     finally:
         for sig, old in previous.items():
             signal.signal(sig, old)
+
+
+def ros1_header_for_cdr(
+    fields: dict[str, str], src_store: Any, stores: CrossVersionStores
+) -> tuple[dict[str, str], Callable[[bytes], Any]]:
+    """A ROS 1 connection header (type, md5sum, definition) and byte converter for a ROS 2 type."""
+    msgtype = fields["type"]
+    if "/msg/" not in msgtype:
+        raise RostoolError(f"type {msgtype} has no ROS 1 equivalent")
+    dst = stores.store_for(src_store, msgtype, msgtype)
+    text, md5 = dst.generate_msgdef(msgtype, ros_version=1)
+    header = {
+        "topic": fields["topic"],
+        "type": msgtype.replace("/msg/", "/"),
+        "md5sum": md5,
+        "message_definition": text,
+        "callerid": fields["callerid"],
+        "latching": fields["latching"],
+    }
+    return header, partial(src_store.cdr_to_ros1, typename=msgtype)

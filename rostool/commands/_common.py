@@ -5,7 +5,7 @@ from __future__ import annotations
 import sys
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Literal
 
 import click
 
@@ -16,6 +16,13 @@ if TYPE_CHECKING:
 def ros_version(ctx: click.Context) -> int | None:
     settings = ctx.find_root().obj
     return getattr(settings, "ros_version", None)
+
+
+def interface_style(ctx: click.Context, type_name: str = "") -> Literal["ros1", "ros2"]:
+    """Whose forms the interface verbs (msg, srv, action show) follow; they need no graph."""
+    from rostool.interfaces.describe_ros2 import ros2_selected
+
+    return "ros2" if ros2_selected(ros_version(ctx), type_name) else "ros1"
 
 
 @contextmanager

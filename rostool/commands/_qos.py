@@ -8,11 +8,10 @@ from typing import Any
 
 import click
 
-from rostool.errors import RostoolError
-from rostool.graph.ros2.dds import PROFILES, QosRequest
+from rostool.graph.qos import PROFILE_NAMES, QosRequest
 
 _QOS_OPTIONS = (
-    click.option("--qos-profile", type=click.Choice(sorted(PROFILES)),
+    click.option("--qos-profile", type=click.Choice(PROFILE_NAMES),
                  help="ROS 2: QoS preset to start from (echo/hz default: adapt to the publishers)."),
     click.option("--qos-reliability", type=click.Choice(["reliable", "best_effort"]), help="ROS 2 only."),
     click.option("--qos-durability", type=click.Choice(["volatile", "transient_local"]), help="ROS 2 only."),
@@ -39,10 +38,3 @@ def qos_options(func: Callable[..., Any]) -> Callable[..., Any]:
         wrapper = option(wrapper)
     return wrapper
 
-
-def use_qos(graph: Any, request: QosRequest) -> None:
-    if not request.given:
-        return
-    if graph.ros_version != 2:
-        raise RostoolError("--qos-* options apply to ROS 2 graphs only: ROS 1 topics have no QoS")
-    graph.qos_request = request

@@ -5,18 +5,13 @@ from __future__ import annotations
 
 import re
 import sys
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import click
 
-from rostool.commands._common import json_option, print_json
-from rostool.commands.service import is_ros2, ros1_graph, ros2_graph
+from rostool.commands._common import json_option, live_graph, print_json
 from rostool.commands.srv import interfaces_option
 from rostool.errors import RostoolError
-
-if TYPE_CHECKING:
-    from rostool.graph.ros1.actions import GoalEvent
-    from rostool.graph.ros2.actions import GoalEvent as Ros2GoalEvent
 
 _TYPE_NAME = re.compile(r"[A-Za-z][\w]*/(action/)?[A-Za-z]\w*\Z")
 
@@ -53,27 +48,15 @@ def list_actions(ctx: click.Context, show_types: bool, as_json: bool) -> None:
       rostool action list
       rostool --ros2 action list -t          # /fibonacci [example_interfaces/action/Fibonacci]
     """
-    from rostool.graph.ros1.actions import list_actions as find_actions
-
-    if is_ros2(ctx):
-        from rostool.graph.ros2.actions import list_actions as find_ros2_actions
-
-        with ros2_graph(ctx) as graph2:
-            found2 = find_ros2_actions(graph2)
-        if as_json:
-            print_json([vars(a) for a in found2])
-        for summary2 in [] if as_json else found2:
-            click.echo(f"{summary2.name} [{summary2.type}]" if show_types else summary2.name)
-        return
-    if show_types:
-        raise RostoolError("action list -t applies to ROS 2 graphs only (ROS 1: `rostool action info`)")
-    with ros1_graph(ctx, "actions") as graph:
-        found = find_actions(graph)
+    with live_graph(ctx) as graph:
+        if show_types and graph.style == "ros1":
+            raise RostoolError("action list -t applies to ROS 2 graphs only (ROS 1: `rostool action info`)")
+        found = graph.actions()
     if as_json:
         print_json([vars(a) for a in found])
         return
     for summary in found:
-        click.echo(summary.name)
+        click.echo(f"{summary.name} [{summary.type}]" if show_types else summary.name)
 
 
 @action.command("info")
@@ -89,48 +72,34 @@ def info(ctx: click.Context, name: str, wait: float, as_json: bool) -> None:
     Example:
       rostool action info /navigate_2d_action
     """
-    from rostool.graph.ros1.actions import action_summary, goal_states
-
-    if is_ros2(ctx):
-        _info_ros2(ctx, name, as_json)
-        return
-    with ros1_graph(ctx, "actions") as graph:
-        summary = action_summary(graph, name)
-        goals = goal_states(graph, summary.name, wait)
+    with live_graph(ctx) as graph:
+        found = graph.action_info(name, wait)
+        style = graph.style
     if as_json:
-        print_json({**vars(summary), "goals": None if goals is None else
-                    [{"id": g.id, "status": g.status_name, "text": g.text} for g in goals]})  # fmt: skip
-        return
-    click.echo(f"Action: {summary.name}\nType: {summary.type or '?'}")
-    for title, nodes in (("Server", summary.servers), ("Clients", summary.clients)):
+        print_json(found)
+    elif style == "ros1":
+        _info_ros1(found, wait)
+    else:
+        click.echo(f"Action: {found['name']}\nType: {found['type']}")
+        for title, nodes in (("Action clients", found["clients"]), ("Action servers", found["servers"])):
+            click.echo(f"{title}: {len(nodes)}")
+            for node in nodes:
+                click.echo(f"    {node}")
+
+
+def _info_ros1(found: dict[str, Any], wait: float) -> None:
+    click.echo(f"Action: {found['name']}\nType: {found['type'] or '?'}")
+    for title, nodes in (("Server", found["servers"]), ("Clients", found["clients"])):
         click.echo(f"{title}: {'None' if not nodes else ''}")
         for node in nodes:
             click.echo(f" * {node}")
+    goals = found["goals"]
     if goals is None:
         click.echo(f"Goals: unknown (no status from the server within {wait:g} s)")
         return
     click.echo(f"Goals: {'None' if not goals else ''}")
     for goal in goals:
-        click.echo(f" * {goal.id}: {goal.status_name}" + (f" ({goal.text})" if goal.text else ""))
-
-
-def _info_ros2(ctx: click.Context, name: str, as_json: bool) -> None:
-    """ros2 action info: the clients and servers of an action."""
-    from rostool.graph.ros2.actions import list_actions as find_actions
-
-    with ros2_graph(ctx) as graph:
-        action_name = graph.resolve(name)
-        found = next((a for a in find_actions(graph) if a.name == action_name), None)
-    if found is None:
-        raise RostoolError(f"unknown action {action_name}: no server announces it (`rostool action list`)")
-    if as_json:
-        print_json(vars(found))
-        return
-    click.echo(f"Action: {found.name}\nType: {found.type}")
-    for title, nodes in (("Action clients", found.clients), ("Action servers", found.servers)):
-        click.echo(f"{title}: {len(nodes)}")
-        for node in nodes:
-            click.echo(f"    {node}")
+        click.echo(f" * {goal['id']}: {goal['status']}" + (f" ({goal['text']})" if goal["text"] else ""))
 
 
 @action.command("show")
@@ -150,12 +119,12 @@ def show(ctx: click.Context, type_name: str, raw: bool, interface_paths: tuple[s
       rostool action show actionlib/TwoInts
       rostool --ros2 action show example_interfaces/action/Fibonacci
     """
-    from rostool.commands._common import ros_version
+    from rostool.commands._common import interface_style
     from rostool.interfaces.action import load_action
-    from rostool.interfaces.describe_ros2 import ros2_selected, show_text
+    from rostool.interfaces.describe_ros2 import show_text
     from rostool.interfaces.sources import interfaces
 
-    if ros2_selected(ros_version(ctx), type_name):
+    if interface_style(ctx, type_name) == "ros2":
         click.echo(show_text(type_name, "action", interface_paths, raw), nl=False)
         return
 
@@ -213,30 +182,13 @@ def send_goal(
       rostool action send-goal /fibonacci actionlib_tutorials/Fibonacci "{order: 5}" --timeout 30
       rostool --ros2 action send-goal /count robo_msgs/action/Count "{count: 3}" --interfaces ~/ros2_ws
     """
-    from rostool.graph.ros1.actions import send_goal as run_goal
-    from rostool.interfaces.sources import interfaces
     from rostool.interfaces.values import message_args
 
     type_name, goal_values = _split_goal_args(values)
     goal = message_args(goal_values)
-    if is_ros2(ctx):
-        from rostool.graph.ros2.actions import send_goal as run_ros2_goal
-
-        render2 = _Ros2Renderer(as_json, show_feedback)
-        with ros2_graph(ctx, interface_paths) as graph2:
-            outcome2 = run_ros2_goal(
-                graph2, name, type_name, goal, timeout, on_event=render2.event, on_sent=render2.sent,
-                on_waiting=lambda text: click.echo(text, err=True), on_cancel=render2.canceling,
-            )  # fmt: skip
-        if not outcome2.succeeded:
-            ctx.exit(1)
-        return
-    render = _Renderer(as_json, show_feedback)
-    with ros1_graph(ctx, "actions") as graph:
-        outcome = run_goal(
-            graph, interfaces(interface_paths), name, type_name, goal, timeout,
-            on_event=render.event, on_sent=render.sent, on_waiting=lambda text: click.echo(text, err=True),
-        )  # fmt: skip
+    with live_graph(ctx, interface_paths) as graph:
+        watcher = (_Renderer if graph.style == "ros1" else _Ros2Renderer)(as_json, show_feedback)
+        outcome = graph.send_goal(name, type_name, goal, timeout, watcher)
     if not outcome.succeeded:
         ctx.exit(1)
 
@@ -248,14 +200,20 @@ class _Renderer:
         self.as_json = as_json
         self.show_feedback = show_feedback
 
-    def sent(self, goal_id: str) -> None:
+    def waiting(self, text: str) -> None:
+        click.echo(text, err=True)
+
+    def canceling(self, goal_id: str) -> None:
+        pass  # actionlib's canceling shows in the status events
+
+    def sent(self, goal_id: str, goal: Any = None, accepted: bool = True) -> None:
         if self.as_json:
             print_json({"event": "sent", "goal_id": goal_id})
         else:
             click.echo(f"Goal sent: {goal_id}")
         sys.stdout.flush()
 
-    def event(self, event: GoalEvent) -> None:
+    def event(self, event: Any) -> None:
         from rostool.output.plain import to_plain
 
         if event.kind == "feedback" and not self.show_feedback:
@@ -277,14 +235,10 @@ class _Renderer:
         sys.stdout.flush()
 
 
-class _Ros2Renderer:
+class _Ros2Renderer(_Renderer):
     """ros2 action send_goal's text, or one JSON object per event."""
 
-    def __init__(self, as_json: bool, show_feedback: bool) -> None:
-        self.as_json = as_json
-        self.show_feedback = show_feedback
-
-    def sent(self, goal_id: str, goal: Any, accepted: bool) -> None:
+    def sent(self, goal_id: str, goal: Any = None, accepted: bool = True) -> None:
         from rostool.output.plain import to_plain
         from rostool.output.yaml_text import to_yaml
 
@@ -303,7 +257,7 @@ class _Ros2Renderer:
             click.echo("Canceling goal...")
         sys.stdout.flush()
 
-    def event(self, event: Ros2GoalEvent) -> None:
+    def event(self, event: Any) -> None:
         from rostool.output.plain import to_plain
         from rostool.output.yaml_text import to_yaml
 
@@ -348,35 +302,23 @@ def cancel(ctx: click.Context, name: str, goal_id: str | None, cancel_all: bool,
       rostool action cancel /navigate_2d_action /rostool-4242-1-1712345678.5
       rostool --ros2 action cancel /fibonacci 5f1b4c0e2d0a4b8e9c3f6a7d8e9f0a1b
     """
-    from rostool.graph.ros1.actions import cancel_goals
+    from rostool.output.plain import to_plain
 
     if cancel_all and goal_id is not None:
         raise RostoolError("give a GOAL_ID or --all, not both (`rostool action info ACTION` lists goal ids)")
-    if is_ros2(ctx):
-        _cancel_ros2(ctx, name, goal_id, as_json)
-        return
-    with ros1_graph(ctx, "actions") as graph:
-        cancel_goals(graph, name, goal_id or "")
-    if as_json:
-        print_json({"action": name, "goal_id": goal_id})
-    else:
-        click.echo(f"canceled {goal_id or 'every goal'} of {name}")
-
-
-def _cancel_ros2(ctx: click.Context, name: str, goal_id: str | None, as_json: bool) -> None:
-    from rostool.graph.ros2.actions import cancel_goals
-    from rostool.output.plain import to_plain
-
-    with ros2_graph(ctx) as graph:
-        action = graph.resolve(name)
-        canceling = cancel_goals(graph, action, goal_id)
-    if as_json:
+    with live_graph(ctx) as graph:
+        canceling = graph.cancel_goals(name, goal_id)
+        style, action = graph.style, graph.resolve(name)
+    if style == "ros1":
+        if as_json:
+            print_json({"action": name, "goal_id": goal_id})
+        else:
+            click.echo(f"canceled {goal_id or 'every goal'} of {name}")
+    elif as_json:
         goals = [{"goal_id": g.goal_id, "stamp": to_plain(g.stamp, "ros2")} for g in canceling]
         print_json({"action": action, "goals_canceling": goals})
-        return
-    if not canceling:
-        click.echo(f"No goals of {action} to cancel")
     else:
-        click.echo(f"Canceling {len(canceling)} goal(s) of {action}:")
-    for goal in canceling:
-        click.echo(f"    {goal.goal_id}")
+        count = f"Canceling {len(canceling)} goal(s) of" if canceling else "No goals of"
+        click.echo(f"{count} {action}" + (":" if canceling else " to cancel"))
+        for goal in canceling:
+            click.echo(f"    {goal.goal_id}")

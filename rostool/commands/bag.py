@@ -8,20 +8,15 @@ from __future__ import annotations
 
 import sys
 from collections.abc import Callable, Sequence
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import click
 
 from rostool.bag.typestores import DEFAULT_DISTRO, DISTROS
 from rostool.commands._common import interfaces_option
-from rostool.commands._qos import qos_options, use_qos
+from rostool.commands._qos import qos_options
 from rostool.errors import RostoolError
-from rostool.graph.ros2.dds import QosRequest
-
-if TYPE_CHECKING:
-    from rostool.bag.sources import RecordSource
-    from rostool.graph.ros1.graph import Ros1Graph
-    from rostool.graph.ros2.graph import Ros2Graph
+from rostool.graph.qos import QosRequest
 
 CONTEXT = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
 TIME_HELP = "seconds since the epoch, or +S for S seconds after the bag's first message"
@@ -404,13 +399,13 @@ def play(
     warn = (lambda text: None) if quiet else (lambda text: click.echo(f"rostool: warning: {text}", err=True))
     with BagReader(paths, distro) as reader, live_graph(ctx) as graph:
         console = Console.detect(quiet)
-        if graph.ros_version == 2:
+        if graph.encoding == "cdr":
             from rostool.bag.play_ros2 import Ros2Player
 
             options.hz = hz or 40.0
-            player: Player = Ros2Player(reader, _ros2(graph), options, console, warn)
+            player: Player = Ros2Player(reader, graph, options, console, warn)
         else:
-            player = Player(reader, _ros1(graph), options, console, warn)
+            player = Player(reader, graph, options, console, warn)
         for flag, used in (("--pause", pause), ("--pause-topics", options.pause_topics)):
             if used and not console.keyboard:  # rosbag would stay paused forever
                 raise RostoolError(f"{flag} needs a terminal on stdin to resume with space")
@@ -437,39 +432,6 @@ def _play_arguments(args: Sequence[str], with_topics: bool) -> tuple[list[str], 
     if not paths:
         raise RostoolError("give at least one bag to play")
     return paths, remaps, topics
-
-
-def _ros2(graph: object) -> Ros2Graph:
-    from rostool.graph.ros2.graph import Ros2Graph
-
-    if not isinstance(graph, Ros2Graph):
-        raise RostoolError("bag play into ROS 2 needs a ROS 2 graph (--ros2 or ROS_VERSION=2)")
-    return graph
-
-
-def _ros1(graph: object) -> Ros1Graph:
-    from rostool.graph.ros1.graph import Ros1Graph
-
-    if not isinstance(graph, Ros1Graph):
-        raise RostoolError("bag play into ROS 1 needs a ROS 1 graph (--ros1 or ROS_MASTER_URI)")
-    return graph
-
-
-def _record_source(graph: object, progress: _RecordProgress | None, include_hidden: bool) -> RecordSource:
-    from rostool.bag.sources import Ros1Source, Ros2Source
-    from rostool.graph.ros2.graph import Ros2Graph
-
-    if isinstance(graph, Ros2Graph):
-
-        def warn(text: str) -> None:
-            if progress is not None:
-                progress.end()
-            click.echo(f"rostool: warning: {text}", err=True)
-
-        return Ros2Source(graph, warn, include_hidden)
-    if include_hidden:
-        raise RostoolError("--include-hidden-topics applies to ROS 2 graphs only (ROS 1 hides no topics)")
-    return Ros1Source(_ros1(graph))
 
 
 # -- record --------------------------------------------------------------------------------------
@@ -592,9 +554,15 @@ def record(
     progress = None if quiet or not sys.stderr.isatty() else _RecordProgress()
     stop = threading.Event()
     with live_graph(ctx, interface_paths) as graph:
-        use_qos(graph, qos)
-        options.default_fmt = "mcap" if graph.ros_version == 2 else "bag"
-        recorder = Recorder(_record_source(graph, progress, include_hidden_topics), options)
+        graph.use_qos(qos)
+        options.default_fmt = "mcap" if graph.encoding == "cdr" else "bag"
+
+        def warn(text: str) -> None:
+            if progress is not None:
+                progress.end()
+            click.echo(f"rostool: warning: {text}", err=True)
+
+        recorder = Recorder(graph.record_source(warn, include_hidden_topics), options)
         with stop_on_signals(stop):
             try:
                 result = recorder.run(stop, progress)

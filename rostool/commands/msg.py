@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import click
 
-from rostool.commands._common import json_option, print_json, ros_version
+from rostool.commands._common import interface_style, json_option, print_json
 from rostool.commands.srv import interfaces_option
 from rostool.errors import RostoolError
 
@@ -21,12 +21,6 @@ def msg() -> None:
       rostool msg list
       rostool --ros2 msg show geometry_msgs/msg/PoseStamped
     """
-
-
-def _is_ros2(ctx: click.Context, type_name: str = "") -> bool:
-    from rostool.interfaces.describe_ros2 import ros2_selected
-
-    return ros2_selected(ros_version(ctx), type_name)
 
 
 def _matches(type_name: str, paths: tuple[str, ...] = ()) -> list[str]:
@@ -60,7 +54,7 @@ def show(ctx: click.Context, type_name: str, interface_paths: tuple[str, ...]) -
     """
     from rostool.interfaces.sources import interfaces
 
-    if _is_ros2(ctx, type_name):
+    if interface_style(ctx, type_name) == "ros2":
         from rostool.interfaces.describe_ros2 import show_text
 
         click.echo(show_text(type_name, "msg", interface_paths), nl=False)
@@ -106,7 +100,7 @@ def list_types(
     from rostool.interfaces.sources import interfaces
 
     only = [k for k, flag in (("msg", only_msgs), ("srv", only_srvs), ("action", only_actions)) if flag]
-    if _is_ros2(ctx):
+    if interface_style(ctx) == "ros2":
         _list_ros2(only or ["msg", "srv", "action"], interface_paths, as_json)
         return
     if only:
@@ -148,7 +142,7 @@ def md5(ctx: click.Context, type_name: str, interface_paths: tuple[str, ...]) ->
     """
     from rostool.interfaces.sources import interfaces
 
-    if _is_ros2(ctx, type_name):
+    if interface_style(ctx, type_name) == "ros2":
         from rostool.interfaces.describe_ros2 import Ros2Interfaces
 
         click.echo(Ros2Interfaces(interface_paths).type_hash(type_name))

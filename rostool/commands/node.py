@@ -55,7 +55,7 @@ def info(ctx: click.Context, name: str, as_json: bool) -> None:
     """
     with live_graph(ctx) as graph:
         details = graph.node_info(name)
-        if graph.ros_version == 2:
+        if graph.style == "ros2":
             _info_ros2(details, as_json)
             return
         uris = {n: graph.node_uri(n) for n in graph.node_names()}

@@ -8,7 +8,7 @@ from typing import Any
 
 import click
 
-from rostool.commands._common import json_option, live_graph, print_json, ros_version
+from rostool.commands._common import json_option, live_graph, print_json
 from rostool.errors import RostoolError
 
 
@@ -27,14 +27,6 @@ def param() -> None:
     """
 
 
-def _yaml_text(value: Any) -> str:
-    """YAML of a value as rosparam writes it; PyYAML's document-end marker after scalars is dropped."""
-    import yaml
-
-    text = yaml.safe_dump(value, default_flow_style=False)
-    return text[:-5] if text.endswith("\n...\n") else text
-
-
 @param.command("list")
 @click.argument("namespace", default="/")
 @json_option
@@ -47,11 +39,10 @@ def list_params(ctx: click.Context, namespace: str, as_json: bool) -> None:
       rostool param list /robot
     """
     with live_graph(ctx) as graph:
-        if graph.ros_version == 2:
+        if graph.style == "ros2":
             _list_ros2(graph, None if namespace == "/" else namespace, as_json)
             return
-        prefix = graph.resolve(namespace)
-        names = [n for n in graph.param_names() if prefix == "/" or n == prefix or n.startswith(prefix + "/")]
+        names = graph.parameters(namespace).names()
     if as_json:
         print_json(names)
     else:
@@ -61,10 +52,8 @@ def list_params(ctx: click.Context, namespace: str, as_json: bool) -> None:
 
 def _list_ros2(graph: Any, node: str | None, as_json: bool) -> None:
     """ros2 param list's forms: one node's names, or every node's under its name."""
-    from rostool.graph.ros2.params import ParameterClient
-
     if node is not None:
-        names = ParameterClient(graph, node).names()
+        names = graph.parameters(node).names()
         if as_json:
             print_json(names)
         else:
@@ -73,7 +62,7 @@ def _list_ros2(graph: Any, node: str | None, as_json: bool) -> None:
     found: dict[str, list[str]] = {}
     for node_name in graph.node_names():
         try:
-            found[node_name] = ParameterClient(graph, node_name, timeout=2.0).names()
+            found[node_name] = graph.parameters(node_name, timeout=2.0).names()
         except RostoolError:
             continue  # a node without parameter services
     if as_json:
@@ -84,9 +73,9 @@ def _list_ros2(graph: Any, node: str | None, as_json: bool) -> None:
 
 
 def _ros2_only_args(graph: Any, extra: str | None, usage: str) -> None:
-    if graph.ros_version == 2 and extra is None:
+    if graph.style == "ros2" and extra is None:
         raise RostoolError(f"ROS 2 parameters belong to a node: {usage}")
-    if graph.ros_version != 2 and extra is not None:
+    if graph.style != "ros2" and extra is not None:
         raise RostoolError(f"too many arguments for a ROS 1 parameter ({usage} is the ROS 2 form)")
 
 
@@ -104,26 +93,12 @@ def get(ctx: click.Context, name: str, param_name: str | None, as_json: bool) ->
     """
     with live_graph(ctx) as graph:
         _ros2_only_args(graph, param_name, "rostool param get NODE PARAM")
-        if param_name is not None:
-            _get_ros2(graph, name, param_name, as_json)
-            return
-        value = graph.get_param(name)
+        node, name = (None, name) if param_name is None else (name, param_name)
+        value, text = graph.parameters(node).show(name)
     if as_json:
         print_json(value)
     else:
-        click.echo(_yaml_text(value))  # rosparam get adds a newline after the YAML, so do we
-
-
-def _get_ros2(graph: Any, node: str, name: str, as_json: bool) -> None:
-    from rostool.graph.ros2.params import NOT_SET, ParameterClient, describe_value, to_python
-
-    value = ParameterClient(graph, node).get(name)
-    if int(value.type) == NOT_SET:
-        raise RostoolError(f"parameter {name} is not set on node {graph.resolve(node)}")
-    if as_json:
-        print_json(to_python(value))
-    else:
-        click.echo(describe_value(value))
+        click.echo(text)  # rosparam get adds a newline after the YAML, so do we
 
 
 @param.command("set", context_settings={"ignore_unknown_options": True})
@@ -145,22 +120,16 @@ def set_(ctx: click.Context, name: str, value: str, ros2_value: str | None, text
 
     with live_graph(ctx) as graph:
         _ros2_only_args(graph, ros2_value, "rostool param set NODE PARAM VALUE")
+        node = None
         if ros2_value is not None:
             node, name, value = name, value, ros2_value
         parsed = _read_text(value) if textfile else parse_yaml(value, f"the value of {name}")
-        if ros2_value is not None:
-            _set_ros2(graph, node, name, parsed)
-            return
-        _set_checked(graph, name, parsed)
-
-
-def _set_ros2(graph: Any, node: str, name: str, value: Any) -> None:
-    from rostool.graph.ros2.params import ParameterClient
-
-    ok, reason = ParameterClient(graph, node).set(name, value)
-    if not ok:
-        raise RostoolError(f"setting parameter {name} on {graph.resolve(node)} failed: {reason or 'refused'}")
-    click.echo("Set parameter successful")
+        params = graph.parameters(node)
+        ok, reason = params.set(name, parsed)
+        if not ok:
+            raise RostoolError(f"setting parameter {name} on {params.node} failed: {reason or 'refused'}")
+        if node is not None:
+            click.echo("Set parameter successful")
 
 
 @param.command("describe")
@@ -175,18 +144,9 @@ def describe(ctx: click.Context, node: str, names: tuple[str, ...], as_json: boo
     Example:
       rostool --ros2 param describe /talker use_sim_time
     """
-    from rostool.graph.ros2.params import TYPE_NAMES, ParameterClient
-
     with live_graph(ctx) as graph:
-        if graph.ros_version != 2:
-            raise RostoolError("param describe applies to ROS 2 nodes (ROS 1 parameters have no descriptors)")
-        client = ParameterClient(graph, node)
-        found = [client.describe(name) for name in names]
-    rows = [
-        {"name": d.name, "type": TYPE_NAMES.get(int(d.type), str(d.type)), "description": d.description,
-         "additional_constraints": d.additional_constraints, "read_only": bool(d.read_only)}
-        for d in found
-    ]  # fmt: skip
+        params = graph.parameters(node)
+        rows = [params.descriptor(name) for name in names]
     if as_json:
         print_json(rows)
         return
@@ -209,20 +169,6 @@ def _read_text(path: str) -> str:
         raise RostoolError(f"cannot read {path}: {err.strerror}") from err
 
 
-def _set_checked(graph: Any, name: str, value: Any) -> None:
-    """Set like rosparam: a mapping updates the namespace key by key instead of replacing it."""
-    if isinstance(value, dict):
-        for key, item in value.items():
-            _set_checked(graph, _join(name, str(key)), item)
-        return
-    try:
-        graph.set_param(name, value)
-    except OverflowError as err:
-        raise RostoolError(f"{name}: integers must fit in 32 bits on the ROS 1 parameter server") from err
-    except TypeError as err:
-        raise RostoolError(f"{name}: this value cannot be stored on the parameter server ({err})") from err
-
-
 @param.command("delete")
 @click.argument("name")
 @click.argument("param_name", required=False, metavar="[PARAM]")
@@ -237,28 +183,13 @@ def delete(ctx: click.Context, name: str, param_name: str | None) -> None:
     """
     with live_graph(ctx) as graph:
         _ros2_only_args(graph, param_name, "rostool param delete NODE PARAM")
-        if param_name is not None:
-            _delete_ros2(graph, name, param_name)
-            return
-        graph.delete_param(name)
-
-
-def _delete_ros2(graph: Any, node: str, name: str) -> None:
-    from rostool.graph.ros2.params import ParameterClient
-
-    ok, reason = ParameterClient(graph, node).delete(name)
-    if not ok:
-        raise RostoolError(
-            f"deleting parameter {name} on {graph.resolve(node)} failed: {reason or 'refused'}"
-        )
-    click.echo("Deleted parameter successfully" + (f": {reason}" if reason else ""))
-
-
-def _is_ros2(ctx: click.Context) -> bool:
-    """The version decides what dump's and load's arguments mean, so it is chosen before reading files."""
-    from rostool.graph import select_ros_version
-
-    return select_ros_version(ros_version(ctx)) == 2
+        node, name = (None, name) if param_name is None else (name, param_name)
+        params = graph.parameters(node)
+        ok, reason = params.delete(name)
+        if not ok:
+            raise RostoolError(f"deleting parameter {name} on {params.node} failed: {reason or 'refused'}")
+        if node is not None:
+            click.echo("Deleted parameter successfully" + (f": {reason}" if reason else ""))
 
 
 @param.command("dump")
@@ -278,25 +209,18 @@ def dump(ctx: click.Context, file: str, namespace: str | None, as_json: bool) ->
       rostool param dump robot.yaml /robot
       rostool --ros2 param dump /talker > talker.yaml
     """
-    if _is_ros2(ctx):
-        _dump_ros2(ctx, node=file, target=namespace or "-", as_json=as_json)
-        return
-    with live_graph(ctx) as graph:
-        value = graph.get_param(namespace or "/")
-    _write(file, _json_text(value) if as_json else _yaml_text(value).rstrip("\n") + "\n")
-
-
-def _dump_ros2(ctx: click.Context, node: str, target: str, as_json: bool) -> None:
-    from rostool.graph.ros2.params import ParameterClient, dump_document
+    from rostool.output.yaml_text import param_yaml
 
     with live_graph(ctx) as graph:
-        document = dump_document(ParameterClient(graph, node))
+        ros2 = graph.style == "ros2"
+        node, target = (file, namespace or "-") if ros2 else (namespace, file)
+        document = graph.parameters(node).dump()
     if as_json:
         _write(target, _json_text(document))
-    elif target == "-":
-        click.echo(_yaml_text(document))  # ros2 param dump prints the YAML and then a blank line
+    elif ros2 and target == "-":
+        click.echo(param_yaml(document))  # ros2 param dump prints the YAML and then a blank line
     else:
-        _write(target, _yaml_text(document))
+        _write(target, param_yaml(document) if ros2 else param_yaml(document).rstrip("\n") + "\n")
 
 
 def _json_text(value: Any) -> str:
@@ -338,15 +262,22 @@ def load(ctx: click.Context, file: str, namespace: str | None, no_use_wildcard: 
       rostool --ros2 param load /talker talker.yaml
       rostool --ros2 param load /talker common.yaml --no-use-wildcard
     """
-    if _is_ros2(ctx):
-        if namespace is None:
-            raise RostoolError("ROS 2 parameters belong to a node: rostool param load NODE FILE")
-        if _load_ros2(ctx, node=file, file=namespace, use_wildcard=not no_use_wildcard):
-            ctx.exit(1)
-        return
-    if no_use_wildcard:
-        raise RostoolError("--no-use-wildcard applies to ROS 2 parameter files (rostool --ros2 param load)")
-    _load_ros1(ctx, file, namespace or "/")
+    with live_graph(ctx) as graph:
+        node = namespace or "/"
+        if graph.style == "ros2":
+            if namespace is None:
+                raise RostoolError("ROS 2 parameters belong to a node: rostool param load NODE FILE")
+            node, file = file, namespace
+        elif no_use_wildcard:
+            raise RostoolError(
+                "--no-use-wildcard applies to ROS 2 parameter files (rostool --ros2 param load)"
+            )
+        results = graph.parameters(node).load(_read_document(file), not no_use_wildcard, file)
+    for name, ok, reason in results:
+        line = f"Set parameter {name} {'successful' if ok else 'failed'}" + (f": {reason}" if reason else "")
+        click.echo(line, err=not ok)
+    if not all(ok for _, ok, _ in results):
+        ctx.exit(1)
 
 
 def _read_document(file: str) -> Any:
@@ -354,38 +285,3 @@ def _read_document(file: str) -> Any:
 
     text = sys.stdin.read() if file == "-" else _read_text(file)
     return parse_yaml(text, file)
-
-
-def _load_ros1(ctx: click.Context, file: str, namespace: str) -> None:
-    value = _read_document(file)
-    with live_graph(ctx) as graph:
-        prefix = graph.resolve(namespace)
-        if isinstance(value, dict):
-            _set_checked(graph, prefix, value)
-        elif value is None:
-            raise RostoolError(f"{file} holds no parameters")
-        else:
-            if prefix == "/":
-                raise RostoolError(f"{file} holds a single value; give a NAMESPACE to store it under")
-            _set_checked(graph, prefix, value)
-
-
-def _load_ros2(ctx: click.Context, node: str, file: str, use_wildcard: bool) -> int:
-    """ros2 param load: one result line per parameter, failures on stderr; returns how many failed."""
-    from rostool.graph.ros2.params import ParameterClient, file_parameters, load_fields
-
-    document = _read_document(file)
-    with live_graph(ctx) as graph:
-        client = ParameterClient(graph, node)
-        parameters = file_parameters(document, client.node, use_wildcard, file)
-        results = client.set_fields(load_fields(client, parameters, file))
-    for name, ok, reason in results:
-        line = f"Set parameter {name} {'successful' if ok else 'failed'}" + (f": {reason}" if reason else "")
-        click.echo(line, err=not ok)
-    return sum(not ok for _, ok, _ in results)
-
-
-def _join(namespace: str, key: str) -> str:
-    if key.startswith("/"):
-        return key
-    return namespace.rstrip("/") + "/" + key

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import click
 
-from rostool.commands._common import interfaces_option, json_option, print_json, ros_version
+from rostool.commands._common import interface_style, interfaces_option, json_option, print_json
 
 
 @click.group()
@@ -19,12 +19,6 @@ def srv() -> None:
       rostool srv list
       rostool --ros2 srv show example_interfaces/srv/AddTwoInts
     """
-
-
-def _is_ros2(ctx: click.Context, type_name: str = "") -> bool:
-    from rostool.interfaces.describe_ros2 import ros2_selected
-
-    return ros2_selected(ros_version(ctx), type_name)
 
 
 def srv_text(paths: tuple[str, ...], type_name: str) -> str:
@@ -59,7 +53,7 @@ def show(ctx: click.Context, type_name: str, raw: bool, interface_paths: tuple[s
     from rostool.interfaces.sources import interfaces
     from rostool.interfaces.srv import load_service, service_names
 
-    if _is_ros2(ctx, type_name):
+    if interface_style(ctx, type_name) == "ros2":
         from rostool.interfaces.describe_ros2 import show_text
 
         click.echo(show_text(type_name, "srv", interface_paths, raw), nl=False)
@@ -97,7 +91,7 @@ def list_types(ctx: click.Context, interface_paths: tuple[str, ...], as_json: bo
     from rostool.interfaces.sources import interfaces
     from rostool.interfaces.srv import service_names
 
-    if _is_ros2(ctx):
+    if interface_style(ctx) == "ros2":
         from rostool.interfaces.describe_ros2 import Ros2Interfaces, list_sections
 
         catalog = Ros2Interfaces(interface_paths)
@@ -129,7 +123,7 @@ def md5(ctx: click.Context, type_name: str, interface_paths: tuple[str, ...]) ->
     from rostool.interfaces.sources import interfaces
     from rostool.interfaces.srv import load_service
 
-    if _is_ros2(ctx, type_name):
+    if interface_style(ctx, type_name) == "ros2":
         raise RostoolError(
             "ROS 2 services have no md5sum; `rostool --ros2 msg md5 TYPE` prints a message type's RIHS01 hash"
         )

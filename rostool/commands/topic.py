@@ -9,9 +9,9 @@ from typing import Any
 import click
 
 from rostool.commands._common import interfaces_option, json_option, live_graph, print_json
-from rostool.commands._qos import qos_options, use_qos
+from rostool.commands._qos import qos_options
 from rostool.errors import RostoolError
-from rostool.graph.ros2.dds import QosRequest
+from rostool.graph.qos import QosRequest
 
 
 @click.group()
@@ -85,7 +85,7 @@ def info(ctx: click.Context, name: str, verbose: bool, as_json: bool) -> None:
         found = next((t for t in graph.topics() if t.name == resolved), None)
         if found is None:
             raise RostoolError(f"unknown topic {resolved}: no node publishes or subscribes to it")
-        if graph.ros_version == 2:
+        if graph.style == "ros2":
             _info_ros2(graph, found, verbose, as_json)
             return
         if verbose:
@@ -119,7 +119,7 @@ def _info_ros2(graph: Any, found: Any, verbose: bool, as_json: bool) -> None:
         for row in rows if verbose else []:
             namespace, _, node = row["node"].rpartition("/")
             qos = row["qos"]
-            depth = f"KEEP_LAST ({qos['depth']})" if qos["depth"] else "KEEP_ALL"
+            depth = {None: "UNKNOWN", 0: "KEEP_ALL"}.get(qos["depth"], f"KEEP_LAST ({qos['depth']})")
             lines += [
                 "", f"Node name: {node}", f"Node namespace: {namespace or '/'}", f"Topic type: {row['type']}",
                 f"Topic type hash: {row['type_hash'] or 'UNKNOWN'}", f"Endpoint type: {kind}",
@@ -167,7 +167,7 @@ def find(ctx: click.Context, type_name: str) -> None:
 
     with live_graph(ctx) as graph:
         for t in graph.topics():
-            if t.type == type_name or (graph.ros_version == 2 and t.type == to_store_name(type_name)):
+            if t.type == type_name or (graph.style == "ros2" and t.type == to_store_name(type_name)):
                 click.echo(t.name)
 
 
@@ -226,8 +226,8 @@ def echo(
     out = sys.stdout
     interactive = out.isatty()
     with live_graph(ctx, interface_paths) as graph:
-        use_qos(graph, qos)
-        renderer = EchoRenderer(mode, fields, noarr, nostr, style=graph.time_style)
+        graph.use_qos(qos)
+        renderer = EchoRenderer(mode, fields, noarr, nostr, style=graph.style)
         if graph.topic_type(name) is None:
             click.echo(f"WARNING: topic [{name}] does not appear to be published yet", err=True)
         inbox = Inbox(graph, name)
@@ -275,7 +275,7 @@ def hz(
     from rostool.graph.rates import RateMeter
 
     with live_graph(ctx) as graph:
-        use_qos(graph, qos)
+        graph.use_qos(qos)
         meters = {graph.resolve(n): RateMeter(window) for n in names}
         for topic_name, meter in meters.items():
             if graph.topic_type(topic_name) is None:
@@ -357,7 +357,7 @@ def bw(ctx: click.Context, name: str, window: int, duration: float | None, qos: 
 
     meter = SizeMeter(window)
     with live_graph(ctx) as graph:
-        use_qos(graph, qos)
+        graph.use_qos(qos)
         graph.subscribe(name, lambda r: meter.arrived(time.monotonic(), len(r.payload)))
         click.echo(f"subscribed to [{name}]")
         started = time.monotonic()
@@ -460,7 +460,7 @@ def pub(
     from rostool.graph.publishing import publish_loop
 
     with live_graph(ctx, interface_paths) as graph:
-        use_qos(graph, qos)
+        graph.use_qos(qos)
         publish_loop(
             graph, name, type_name, values, rate=rate, once=once, latch=latch, count=count,
             file=file, say=(lambda _t: None) if quiet else click.echo,

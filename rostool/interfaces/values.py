@@ -19,6 +19,11 @@ def parse_yaml(text: str, what: str = "value") -> Any:
         raise RostoolError(f"invalid YAML in {what}{where}: {problem}") from err
 
 
+def call_args(args: tuple[str, ...]) -> list[Any]:
+    """Command-line values as `rosservice call` reads them: each one YAML, an empty one is ''."""
+    return [parse_yaml(arg or "''", f"value {index + 1}") for index, arg in enumerate(args)]
+
+
 def message_args(args: tuple[str, ...]) -> Any:
     """`rostopic pub` argument rules: one YAML mapping, or positional field values."""
     if not args:

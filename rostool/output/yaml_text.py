@@ -85,3 +85,10 @@ def value_to_yaml(value: object, style: TimeStyle = "ros1") -> str:
         .rstrip("\n")
         .removesuffix("\n...")
     )
+
+
+def param_yaml(value: Any) -> str:
+    """YAML of a parameter value as rosparam writes it; PyYAML's document-end marker after scalars is
+    dropped."""
+    text = yaml.safe_dump(value, default_flow_style=False)
+    return text[:-5] if text.endswith("\n...\n") else text

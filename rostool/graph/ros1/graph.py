@@ -5,7 +5,7 @@ from __future__ import annotations
 import contextlib
 import time
 from collections.abc import Callable, Sequence
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 from rostool.errors import RostoolError
 from rostool.graph.base import Connection, NodeInfo, Publisher, Received, Subscription, TopicInfo
@@ -13,15 +13,20 @@ from rostool.graph.ros1 import env
 from rostool.graph.ros1.master_client import MasterClient, RemoteError, Unreachable, call
 from rostool.graph.ros1.names import anonymous, resolve
 from rostool.graph.ros1.node import Node
+from rostool.graph.ros1.protocol import Ros1Verbs
 from rostool.graph.ros1.topics import InboundLink
 from rostool.interfaces.ros1 import Ros1Type, TypeRegistry
 
+if TYPE_CHECKING:
+    from rostool.graph.recording import Encoding
 
-class Ros1Graph:
+
+class Ros1Graph(Ros1Verbs):
     """Read-only verbs use the master alone; subscribing or publishing starts a node lazily."""
 
     ros_version = 1
-    time_style: Literal["ros1", "ros2"] = "ros1"
+    style: Literal["ros1", "ros2"] = "ros1"
+    encoding: Encoding = "ros1"
 
     def __init__(self, node_name: str = "rostool", interface_paths: Sequence[str] = ()) -> None:
         self.interface_paths = tuple(interface_paths)
@@ -171,27 +176,3 @@ class Ros1Graph:
 
         msg_type = self.wire_type(type_name)
         return build_message(msg_type.store, msg_type.store_name, value)
-
-    # --- parameters ---------------------------------------------------------------------------
-    def param_names(self) -> list[str]:
-        return sorted(self.master.param_names())
-
-    def get_param(self, name: str) -> Any:
-        name = resolve(name)
-        try:
-            return self.master.get_param(name)
-        except RemoteError as err:
-            raise RostoolError(f"parameter {name} is not set") from err
-
-    def set_param(self, name: str, value: Any) -> None:
-        self.master.set_param(resolve(name), value)
-
-    def delete_param(self, name: str) -> None:
-        name = resolve(name)
-        try:
-            self.master.delete_param(name)
-        except RemoteError as err:
-            raise RostoolError(f"parameter {name} is not set, nothing to delete") from err
-
-    def has_param(self, name: str) -> bool:
-        return self.master.has_param(resolve(name))

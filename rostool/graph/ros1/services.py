@@ -288,13 +288,6 @@ def service_type(master: MasterClient, catalog: Interfaces, name: str, uri: str)
     return srv
 
 
-def parse_args(args: tuple[str, ...]) -> list[Any]:
-    """Command-line values as `rosservice call` reads them: each one YAML, an empty one is ''."""
-    from rostool.interfaces.values import parse_yaml
-
-    return [parse_yaml(arg or "''", f"value {index + 1}") for index, arg in enumerate(args)]
-
-
 def build_request(srv: SrvType, values: list[Any]) -> Any:
     """The request from one YAML mapping, or from the field values in order (all of them)."""
     from rostool.interfaces.fill import FillError, build_message
@@ -322,11 +315,13 @@ def call(
     args: tuple[str, ...],
     wait: bool = False,
     timeout: float | None = None,
-) -> tuple[SrvType, Any]:
-    """`rosservice call`: find the service and its type, build the request, call, return the response."""
+) -> tuple[Any, Any]:
+    """`rosservice call`: find the service and its type, build the request, call; (request, response)."""
+    from rostool.interfaces.values import call_args
+
     name = resolve(name)
     uri = wait_for(master, name, timeout) if wait else lookup(master, name)
     srv = service_type(master, catalog, name, uri)
-    request = build_request(srv, parse_args(args))
+    request = build_request(srv, call_args(args))
     with ServiceClient(name, uri, srv, master.caller_id, timeout=timeout) as client:
-        return srv, client.call(request)
+        return request, client.call(request)

@@ -32,9 +32,11 @@ from rostool.graph.ros2.discovery import (
     encode_entities_info,
 )
 from rostool.graph.ros2.names import resolve, service_type, topic_to_dds, type_to_dds
+from rostool.graph.ros2.protocol import Ros2Verbs
 from rostool.graph.ros2.types import TypeSupport, distro_from_env, gid_size
 
 if TYPE_CHECKING:
+    from rostool.graph.recording import Encoding
     from rostool.graph.ros2.services import ServiceClient
     from rostool.graph.ros2.type_description import TypeDescriptionServer
 
@@ -150,11 +152,12 @@ class Session:
         self.participant.close()
 
 
-class Ros2Graph:
+class Ros2Graph(Ros2Verbs):
     """Read-only verbs wait for discovery to settle; subscribing and publishing add DDS endpoints."""
 
     ros_version = 2
-    time_style: Literal["ros1", "ros2"] = "ros2"
+    style: Literal["ros1", "ros2"] = "ros2"
+    encoding: Encoding = "cdr"
 
     def __init__(
         self,
@@ -479,28 +482,6 @@ class Ros2Graph:
 
         store_name = self.types.store_name(type_name)
         return build_message(self.types.store, store_name, self.types.with_defaults(store_name, value))
-
-    # --- parameters ---------------------------------------------------------------------------
-    def _no_params(self) -> RostoolError:
-        return RostoolError(
-            "ROS 2 parameters belong to nodes: use `rostool param list|get|set|describe|delete|dump|load "
-            "NODE ...`"
-        )
-
-    def param_names(self) -> list[str]:
-        raise self._no_params()
-
-    def get_param(self, name: str) -> Any:
-        raise self._no_params()
-
-    def set_param(self, name: str, value: Any) -> None:
-        raise self._no_params()
-
-    def delete_param(self, name: str) -> None:
-        raise self._no_params()
-
-    def has_param(self, name: str) -> bool:
-        raise self._no_params()
 
 
 class _Publisher:

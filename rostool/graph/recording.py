@@ -1,0 +1,46 @@
+"""Where `bag record` gets messages: every backend's `Graph.record_source()` (ROS 1: TCPROS bytes,
+ROS 2: CDR bytes over DDS).
+
+A source finds published topics, subscribes with a callback `put(topic, payload, origin)` called from
+network threads, and describes an origin once (the connection header a bag stores). `origin` is whatever
+identifies one publisher connection cheaply: a TCPROS link in ROS 1, the topic's type name in ROS 2.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any, Literal, Protocol
+
+from rostool.errors import RostoolError
+
+if TYPE_CHECKING:
+    from rostool.graph.base import Graph
+
+Encoding = Literal["ros1", "cdr"]
+Put = Callable[[str, bytes, Any], None]
+
+
+class RecordSource(Protocol):
+    encoding: Encoding
+    types: Any  # ROS 1: the graph's TypeRegistry
+    store: Any  # ROS 2: the graph's rosbags type store
+
+    def resolve(self, name: str) -> str: ...
+
+    def published_topics(self) -> list[str]: ...
+
+    def subscribed_topics(self, node: str) -> list[str]: ...
+
+    def subscribe(self, topic: str, put: Put) -> None: ...
+
+    def describe(self, topic: str, origin: Any) -> dict[str, str]: ...
+
+    def close(self) -> None: ...
+
+
+def subscribed_by(graph: Graph, node: str) -> list[str]:
+    """The topics `node` subscribes to now; none while the graph does not answer."""
+    try:
+        return [t.name for t in graph.topics() if node in t.subscribers]
+    except RostoolError:
+        return []
