@@ -41,6 +41,7 @@ if TYPE_CHECKING:
     from rostool.graph.ros2.type_description import TypeDescriptionServer
 
 SETTLE_MAX_SECONDS = 3.0  # listing verbs: how long an empty graph is given before "no participants"
+NODES_MAX_SECONDS = 4.5  # node verbs: Fast DDS sends ros_discovery_info on its 3 s heartbeat
 TOPIC_WAIT_SECONDS = 1.5
 NODE_WAIT_SECONDS = 1.0  # unknown types: how long to wait for the publishers' nodes to be announced
 READER_CACHE_DEPTH = 1000  # echo/hz/pub: how long to look for a topic before warning it is not there yet
@@ -212,9 +213,9 @@ class Ros2Graph(Ros2Verbs):
         return resolve(name)
 
     # --- discovery ----------------------------------------------------------------------------
-    def _settled(self, require_peers: bool) -> GraphCache:
+    def _settled(self, require_peers: bool, nodes: bool = False) -> GraphCache:
         cache = self.session.cache
-        found = cache.settle(maximum=SETTLE_MAX_SECONDS)
+        found = cache.settle(maximum=NODES_MAX_SECONDS if nodes else SETTLE_MAX_SECONDS, nodes=nodes)
         if require_peers and not found:
             participant = self.session.participant
             raise RostoolError(
@@ -229,11 +230,11 @@ class Ros2Graph(Ros2Verbs):
 
     # --- nodes --------------------------------------------------------------------------------
     def node_names(self) -> list[str]:
-        cache = self._settled(require_peers=True)
+        cache = self._settled(require_peers=True, nodes=True)
         return sorted({node.full_name for node in cache.node_entries()})
 
     def node_uri(self, name: str) -> str:
-        cache = self._settled(require_peers=True)
+        cache = self._settled(require_peers=True, nodes=True)
         resolved = resolve(name)
         with cache._lock:
             for participant, nodes in cache.nodes.items():
@@ -291,7 +292,7 @@ class Ros2Graph(Ros2Verbs):
     def topic_endpoints(self, name: str) -> list[dict[str, Any]]:
         """Every remote reader and writer of a topic with its node, type, GID and QoS (topic info -v)."""
         resolved = resolve(name)
-        cache = self._settled(require_peers=True)
+        cache = self._settled(require_peers=True, nodes=True)
         owners = self._owners(cache)
         rows = []
         for endpoint in cache.remote_endpoints():
