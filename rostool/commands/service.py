@@ -60,8 +60,7 @@ def list_services(
             prefix = graph.resolve(namespace).rstrip("/") + "/"
             found = [s for s in found if s[0] == prefix[:-1] or s[0].startswith(prefix)]
     if as_json:
-        typed = [({"name": n} if t is None else {"name": n, "type": t}, nodes) for n, t, nodes in found]
-        print_json([{**entry, "nodes": nodes} for entry, nodes in typed])
+        print_json([{"name": n, **({} if t is None else {"type": t}), "nodes": ns} for n, t, ns in found])
         return
     for name, type_, nodes in found:
         line = f"{name} [{type_}]" if show_types else name

@@ -123,6 +123,7 @@ class Graph(Protocol):
     # topics
     def topics(self) -> list[TopicInfo]: ...
     def topic_type(self, name: str) -> str | None: ...
+    def topic_endpoints(self, name: str) -> list[dict[str, Any]]: ...  # ros2 topic info -v's rows
     def subscribe(
         self,
         topic: str,

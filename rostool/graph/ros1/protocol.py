@@ -31,6 +31,9 @@ class Ros1Verbs:
 
         return interfaces(self.interface_paths)
 
+    def topic_endpoints(self, name: str) -> list[dict[str, Any]]:
+        raise RostoolError("topic endpoints with GIDs and QoS exist on ROS 2 graphs only")
+
     # --- bag play and record ------------------------------------------------------------------
     def raw_publisher(self: Ros1Graph, topic: str, wire_type: Ros1Type, latch: bool = False) -> Publisher:
         return self.node.advertise(topic, wire_type, latch)
