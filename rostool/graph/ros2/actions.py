@@ -17,6 +17,7 @@ rostool's own few, or .action files in the interface sources.
 
 from __future__ import annotations
 
+import contextlib
 import threading
 import time
 import uuid
@@ -202,11 +203,11 @@ class ActionClient:
             time.sleep(0.02)
         return True
 
-    def send(self, goal: Any, timeout: float) -> tuple[bytes, bool]:
-        """Send a goal with a fresh UUID; (goal id, accepted)."""
+    def send(self, goal: Any, timeout: float, goal_id: bytes | None = None) -> tuple[bytes, bool]:
+        """Send a goal with `goal_id` (else a fresh UUID); (goal id, accepted)."""
         from rostool.interfaces.fill import build_message
 
-        goal_id = uuid.uuid4().bytes
+        goal_id = goal_id or uuid.uuid4().bytes
         request = build_message(
             self._store.store, self.types.send_goal + "_Request", {"goal_id": {"uuid": list(goal_id)}}
         )
@@ -277,12 +278,8 @@ def send_goal(
             on_waiting("Waiting for an action server to become available...")
         if not client.wait_for_server(max(limit - (time.monotonic() - started), 0.0)):
             raise RostoolError(f"no action server for {action} matched within {timeout:g} s")
-    goal_id, accepted = client.send(goal, max(limit - (time.monotonic() - started), 0.01))
+    goal_id = uuid.uuid4().bytes
     hex_id = goal_id.hex()
-    if on_sent is not None:
-        on_sent(hex_id, goal, accepted)
-    if not accepted:
-        return GoalOutcome(hex_id, None)
     box: dict[str, Any] = {}
     # An Event, not Thread.join: a join interrupted by Ctrl+C marks the thread finished (bpo-45274 fix)
     finished = threading.Event()
@@ -295,8 +292,17 @@ def send_goal(
         finally:
             finished.set()
 
-    threading.Thread(target=fetch, name=f"result of {action}", daemon=True).start()
+    fetching = False
+    # One try from the moment the goal may reach the server: it must not run on after a Ctrl+C, even one
+    # that comes before the server's answer (it may have accepted the goal already)
     try:
+        _, accepted = client.send(goal, max(limit - (time.monotonic() - started), 0.01), goal_id)
+        if on_sent is not None:
+            on_sent(hex_id, goal, accepted)
+        if not accepted:
+            return GoalOutcome(hex_id, None)
+        threading.Thread(target=fetch, name=f"result of {action}", daemon=True).start()
+        fetching = True
         while not finished.wait(0.02):
             for feedback in client.take_feedback(goal_id):
                 if on_event is not None:
@@ -306,6 +312,10 @@ def send_goal(
     except (KeyboardInterrupt, GoalTimeout):
         if on_cancel is not None:
             on_cancel(hex_id)
+        if not fetching:  # maybe never sent, or not accepted: cancel what the server may have
+            with contextlib.suppress(RostoolError):
+                client.cancel(goal_id, CANCEL_WAIT)
+            raise
         response = client.cancel(goal_id)
         if response.return_code != 0 or not response.goals_canceling:
             why = CANCEL_ERRORS.get(response.return_code, f"return code {response.return_code}")

@@ -1,0 +1,162 @@
+"""Services, parameters and actions against real rclpy nodes (Jazzy and Kilted, rmw_fastrtps_cpp).
+
+Fast DDS pairs a reply with its request by RTPS sample identity, not by an in-payload header as
+rmw_cyclonedds_cpp does; rostool picks the convention by the server's GUID vendor (services.py). Every test
+asserts both sides: what rostool printed and what the real node's callback saw (tests/rclpy_peer.py's
+events). One-shot CLI calls are repeated because each one is a fresh participant racing discovery, where
+lost replies used to show (Cyclone drops what a Fast DDS writer's first heartbeat announces).
+"""
+
+from __future__ import annotations
+
+import json
+import signal
+from collections.abc import Callable
+from pathlib import Path
+
+from tests.ros2_peers import RclpyPeer
+from tests.support import rostool, rostool_popen, stop
+
+Start = Callable[..., RclpyPeer]
+CALLS = 3  # fresh rostool processes per check
+
+
+def test_service_call_reaches_the_real_server(graph_env: dict[str, str], start_peer: Start) -> None:
+    peer = start_peer("--name", "flags", "--service", "/set_flag")
+    for attempt in range(CALLS):
+        called = rostool(["service", "call", "/set_flag", "std_srvs/srv/SetBool", "{data: true}"], graph_env)
+        assert called.returncode == 0, called.stderr
+        assert "requester: making request: std_srvs.srv.SetBool_Request(data=True)" in called.stdout
+        assert "std_srvs.srv.SetBool_Response(success=True, message='flag is True')" in called.stdout
+        assert len(peer.of("service")) == attempt + 1
+    assert all(event["data"] is True for event in peer.of("service"))
+    # the type from discovery, JSON out, data false
+    called = rostool(["service", "call", "/set_flag", "{data: false}", "--json"], graph_env)
+    assert called.returncode == 0, called.stderr
+    assert json.loads(called.stdout) == {"success": False, "message": "flag is False"}
+    peer.wait_for("service", lambda e: e["data"] is False)
+    assert len(peer.of("service")) == CALLS + 1  # never a request twice, never a corrupt one
+
+
+def test_service_type_list_and_find(graph_env: dict[str, str], start_peer: Start) -> None:
+    start_peer("--name", "flags", "--service", "/set_flag")
+    assert rostool(["service", "type", "/set_flag"], graph_env).stdout == "std_srvs/srv/SetBool\n"
+    listed = rostool(["service", "list", "-t"], graph_env).stdout.splitlines()
+    assert "/set_flag [std_srvs/srv/SetBool]" in listed
+    assert "/flags/list_parameters [rcl_interfaces/srv/ListParameters]" in listed
+
+
+def test_service_call_without_a_server_ends_in_one_line(graph_env: dict[str, str], start_peer: Start) -> None:
+    start_peer("--name", "flags", "--service", "/set_flag")
+    called = rostool(
+        ["service", "call", "/nothing", "std_srvs/srv/SetBool", "{data: true}", "--timeout", "2"], graph_env
+    )
+    assert called.returncode != 0
+    assert called.stdout == ""
+    lines = called.stderr.strip().splitlines()
+    assert len(lines) == 1 and "/nothing" in lines[0], called.stderr
+
+
+def test_parameters_of_a_real_node(graph_env: dict[str, str], start_peer: Start, tmp_path: Path) -> None:
+    peer = start_peer("--name", "talker", "--params")
+    names = rostool(["param", "list", "/talker"], graph_env)
+    assert names.returncode == 0, names.stderr
+    listed = names.stdout.split()
+    assert {"flag", "count", "speed", "label", "blob", "ids", "gains", "names", "use_sim_time"} <= set(listed)
+    assert rostool(["param", "get", "/talker", "speed"], graph_env).stdout == "Double value is: 0.5\n"
+    assert rostool(["param", "get", "/talker", "ids"], graph_env).stdout == "Integer values are: [1, 2, 3]\n"
+
+    changed = rostool(["param", "set", "/talker", "speed", "0.75"], graph_env)
+    assert changed.stdout == "Set parameter successful\n", changed.stderr
+    peer.wait_for("param", lambda e: e["name"] == "speed" and e["value"] == 0.75)  # the node's own view
+    assert rostool(["param", "get", "/talker", "speed"], graph_env).stdout == "Double value is: 0.75\n"
+
+    described = rostool(["param", "describe", "/talker", "label"], graph_env).stdout
+    assert "Parameter name: label" in described and "Type: string" in described
+
+    dumped = rostool(["param", "dump", "/talker"], graph_env)
+    assert dumped.returncode == 0, dumped.stderr
+    assert "    speed: 0.75\n" in dumped.stdout and "    label: r2\n" in dumped.stdout
+
+    params_file = tmp_path / "talker.yaml"
+    params_file.write_text("/talker:\n  ros__parameters:\n    label: r3\n    count: 7\n")
+    loaded = rostool(["param", "load", "/talker", str(params_file)], graph_env)
+    assert loaded.returncode == 0, loaded.stderr
+    peer.wait_for("param", lambda e: e["name"] == "label" and e["value"] == "r3")
+    peer.wait_for("param", lambda e: e["name"] == "count" and e["value"] == 7)
+
+    # rclpy refuses to undeclare a declared parameter: rostool reports the node's reason
+    deleted = rostool(["param", "delete", "/talker", "speed"], graph_env)
+    assert deleted.returncode != 0
+    assert "speed" in deleted.stderr and len(deleted.stderr.strip().splitlines()) == 1
+
+
+def test_action_goal_with_feedback_and_result(graph_env: dict[str, str], start_peer: Start) -> None:
+    peer = start_peer("--name", "fib", "--action", "/fibonacci", "--step", "0.05")
+    for attempt in range(2):
+        sent = rostool(
+            ["action", "send-goal", "/fibonacci", "test_msgs/action/Fibonacci", "{order: 5}", "--feedback",
+             "--json"],
+            graph_env,
+        )  # fmt: skip
+        assert sent.returncode == 0, sent.stderr
+        events = [json.loads(line) for line in sent.stdout.splitlines()]
+        assert events[0]["event"] == "sent" and events[0]["accepted"] is True
+        feedback = [e["feedback"]["sequence"] for e in events if e["event"] == "feedback"]
+        # every feedback, the first one too (a second goal meets a writer with history)
+        assert feedback == [[0, 1, 1], [0, 1, 1, 2], [0, 1, 1, 2, 3], [0, 1, 1, 2, 3, 5]], attempt
+        result = {"event": "result", "status": "SUCCEEDED", "result": {"sequence": [0, 1, 1, 2, 3, 5]}}
+        assert events[-1] == result
+        assert len(peer.of("done")) == attempt + 1
+    assert peer.of("done")[-1]["sequence"] == [0, 1, 1, 2, 3, 5]
+    assert [e["order"] for e in peer.of("goal")] == [5, 5]
+
+
+def test_action_timeout_cancels_the_goal_on_the_server(graph_env: dict[str, str], start_peer: Start) -> None:
+    peer = start_peer("--name", "fib", "--action", "/fibonacci", "--step", "0.3")
+    sent = rostool(
+        ["action", "send-goal", "/fibonacci", "test_msgs/action/Fibonacci", "{order: 30}", "--timeout", "2"],
+        graph_env,
+    )
+    assert sent.returncode != 0
+    assert "Goal finished with status: CANCELED" in sent.stdout
+    assert "canceled it" in sent.stderr
+    peer.wait_for("cancel")
+    peer.wait_for("canceled")
+    assert not peer.of("done")
+
+
+def test_action_ctrl_c_cancels_the_goal_on_the_server(graph_env: dict[str, str], start_peer: Start) -> None:
+    peer = start_peer("--name", "fib", "--action", "/fibonacci", "--step", "0.3")
+    proc = rostool_popen(
+        ["action", "send-goal", "/fibonacci", "test_msgs/action/Fibonacci", "{order: 30}"], graph_env
+    )
+    try:
+        peer.wait_for("goal", timeout=20)
+        proc.send_signal(signal.SIGINT)
+        out, err = proc.communicate(timeout=20)
+    finally:
+        stop(proc)
+    assert proc.returncode == 130, err
+    # the server runs the goal before rostool hears that it was accepted: Ctrl+C in between cancels too
+    assert "Canceling goal..." in out, err
+    peer.wait_for("cancel")
+    peer.wait_for("canceled")
+    assert not peer.of("done")
+
+
+def test_action_cancel_verb_reaches_the_server(graph_env: dict[str, str], start_peer: Start) -> None:
+    peer = start_peer("--name", "fib", "--action", "/fibonacci", "--step", "0.3")
+    goal = ["action", "send-goal", "/fibonacci", "test_msgs/action/Fibonacci", "{order: 30}", "--json"]
+    proc = rostool_popen(goal, graph_env)
+    try:
+        peer.wait_for("goal", timeout=20)
+        canceled = rostool(["action", "cancel", "/fibonacci"], graph_env)
+        out, err = proc.communicate(timeout=20)
+    finally:
+        stop(proc)
+    assert canceled.returncode == 0, canceled.stderr
+    goal_id = json.loads(out.splitlines()[0])["goal_id"]
+    assert canceled.stdout.split() == ["Canceling", "1", "goal(s)", "of", "/fibonacci:", goal_id]
+    peer.wait_for("cancel")
+    assert json.loads(out.splitlines()[-1])["status"] == "CANCELED", err
