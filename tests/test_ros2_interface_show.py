@@ -104,6 +104,7 @@ def test_list_in_ros2_interface_list_form(workspace: Path) -> None:
     assert messages == sorted(messages)
     assert lines[lines.index("Actions:") + 1 :] == [
         "    example_interfaces/action/Fibonacci", "    robo_msgs/action/Count",
+        "    test_msgs/action/Fibonacci",
     ]  # fmt: skip
     only_srvs = rostool(["srv", "list"], env).stdout.splitlines()
     assert only_srvs == rostool(["msg", "list", "-s"], env).stdout.splitlines()
