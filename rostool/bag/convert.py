@@ -26,8 +26,8 @@ from rosbags.interfaces import Connection, ConnectionExtRosbag1, ConnectionExtRo
 from rosbags.typesys.store import Typestore
 
 from rostool.bag.crossver import CrossVersionStores
-from rostool.bag.open import BagInput, detect
-from rostool.bag.reader import BagReader, describe
+from rostool.bag.open import BagInput, describe, detect
+from rostool.bag.reader import BagReader
 from rostool.bag.typestores import DEFAULT_DISTRO
 from rostool.errors import RostoolError
 

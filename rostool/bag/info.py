@@ -14,10 +14,9 @@ import time
 from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
-from struct import error as struct_error
 from typing import Any
 
-from rostool.bag.open import BagInput, detect, load_metadata
+from rostool.bag.open import BagInput, detect, guard, load_metadata
 from rostool.errors import RostoolError
 
 NS = 1_000_000_000
@@ -100,14 +99,15 @@ def _topic_dict(topic: TopicInfo) -> dict[str, Any]:
 def bag_info(given: str | Path | BagInput, freq: bool = False) -> BagInfo:
     bag = given if isinstance(given, BagInput) else detect(given)
     try:
-        if bag.kind == "bag":
-            return _ros1_info(bag, freq)
-        if bag.kind == "rosbag2":
-            info = _rosbag2_info(bag)
-        elif bag.kind == "mcap":
-            info = _mcap_info(bag)
-        else:
-            info = _db3_info(bag)
+        with guard(bag.path):  # whatever a damaged file makes the parsers raise: one line naming it
+            if bag.kind == "bag":
+                return _ros1_info(bag, freq)
+            if bag.kind == "rosbag2":
+                info = _rosbag2_info(bag)
+            elif bag.kind == "mcap":
+                info = _mcap_info(bag)
+            else:
+                info = _db3_info(bag)
     except RostoolError as err:
         text = str(err)
         raise RostoolError(text if text.startswith(str(bag.path)) else f"{bag.path}: {text}") from err
@@ -235,7 +235,6 @@ def describe_key(err: Exception) -> str:
 
 # -- mcap ----------------------------------------------------------------------------------------
 def _mcap_info(bag: BagInput) -> BagInfo:
-    from mcap.exceptions import McapError
     from mcap.reader import make_reader
 
     counts: Counter[tuple[int, int]] = Counter()  # (file index, channel id) -> messages
@@ -251,7 +250,7 @@ def _mcap_info(bag: BagInput) -> BagInfo:
                 reader = make_reader(handle)
                 profile = reader.get_header().profile
                 summary = reader.get_summary()
-            except (McapError, ValueError, OSError, EOFError, AssertionError, struct_error):
+            except Exception:  # any damage in the summary section: count by scanning instead
                 summary = None
         if summary is not None and summary.statistics is not None:
             stats = summary.statistics
@@ -322,7 +321,6 @@ class _Scan:
 
 def _scan_mcap(path: Path) -> _Scan:
     """Counts of an mcap without summary, by reading every record (a truncated tail is ignored)."""
-    from mcap.exceptions import McapError
     from mcap.records import Channel, Message, Schema
     from mcap.stream_reader import StreamReader
 
@@ -340,8 +338,8 @@ def _scan_mcap(path: Path) -> _Scan:
                     schemas[record.id] = record
                 elif isinstance(record, Channel):
                     scan.channels[record.id] = (record, schemas.get(record.schema_id))
-        except (McapError, ValueError, EOFError, AssertionError, OSError, struct_error):
-            pass  # truncated: report what was readable
+        except Exception:  # truncated or damaged: report what was readable up to there
+            pass
     return scan
 
 
@@ -360,6 +358,7 @@ def _db3_info(bag: BagInput) -> BagInfo:
             db = sqlite3.connect(f"file:{path}?mode=ro&immutable=1", uri=True)
         except sqlite3.Error as err:
             raise RostoolError(f"{path}: cannot open database: {err}") from err
+        db.text_factory = lambda raw: raw.decode("utf-8", errors="replace")  # damaged text stays readable
         try:
             tables = {row[0] for row in db.execute("SELECT name FROM sqlite_master WHERE type='table'")}
             if not {"messages", "topics"} <= tables:
@@ -378,6 +377,8 @@ def _db3_info(bag: BagInput) -> BagInfo:
             for tid, count, lo, hi in db.execute(
                 "SELECT topic_id, COUNT(*), MIN(timestamp), MAX(timestamp) FROM messages GROUP BY topic_id"
             ):
+                if not all(isinstance(value, int) for value in (count, lo, hi)):
+                    raise RostoolError(f"{path}: damaged database: message timestamps are not integers")
                 counts[names.get(tid, f"<topic id {tid}>")] += count
                 start = lo if start is None else min(start, lo)
                 end = hi if end is None else max(end, hi)
@@ -431,7 +432,11 @@ def _frequency(freq: float) -> str:
 def _stamp(ns: int) -> str:
     secs = ns / NS
     fraction = f"{secs - int(secs):.2f}"[1:]
-    return f"{time.strftime('%b %d %Y %H:%M:%S', time.localtime(secs))}{fraction} ({secs:.2f})"
+    try:
+        when = time.strftime("%b %d %Y %H:%M:%S", time.localtime(secs)) + fraction
+    except (OverflowError, ValueError, OSError):  # a damaged or made-up time stamp
+        when = "out of range"
+    return f"{when} ({secs:.2f})"
 
 
 def _duration(duration: float) -> str:

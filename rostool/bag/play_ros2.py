@@ -23,8 +23,8 @@ from typing import TYPE_CHECKING, Any, cast
 from rosbags.interfaces import Connection, ConnectionExtRosbag1, ConnectionExtRosbag2
 
 from rostool.bag.crossver import CrossVersionStores
+from rostool.bag.open import describe
 from rostool.bag.play import Console, Player, PlayOptions, RawPublisher, _Kind
-from rostool.bag.reader import describe
 from rostool.errors import RostoolError
 
 if TYPE_CHECKING:

@@ -21,7 +21,7 @@ from typing import Any
 
 from rosbags.interfaces import Connection, ConnectionExtRosbag1, MessageDefinitionFormat
 
-from rostool.bag.open import BagInput, detect
+from rostool.bag.open import BagInput, detect, fallback_warning, guard, sniff, warn
 from rostool.bag.typestores import DEFAULT_DISTRO, StoredDefinition, TypeResolver
 from rostool.errors import RostoolError
 
@@ -53,11 +53,6 @@ class _Part:
     end_ns: int = 0
 
 
-def describe(err: BaseException) -> str:
-    text = str(err.args[0]) if err.args and isinstance(err.args[0], str) else str(err)
-    return text.strip() or type(err).__name__
-
-
 class BagReader(AbstractContextManager["BagReader"]):
     """Opens bags given as paths (or detected inputs); all must be ROS 1 or all ROS 2."""
 
@@ -74,6 +69,7 @@ class BagReader(AbstractContextManager["BagReader"]):
         self._parts: list[_Part] = []
         self.connections: list[Connection] = []
         self.topics: dict[str, Topic] = {}
+        self._origin: dict[int, Path] = {}  # id(our connection) -> the file it was first seen in
         try:
             for bag in self.inputs:
                 self._open(bag)
@@ -97,20 +93,37 @@ class BagReader(AbstractContextManager["BagReader"]):
             from rosbags.rosbag2.reader import DirectoryReader
 
             directory = DirectoryReader(bag.path)
-            self._enter(bag.path, directory)
+            try:
+                self._enter(bag.path, directory)
+            except RostoolError as err:
+                self._open_beside(bag, err)
+                return
             compressed = directory.metadata.compression_mode == "message"
             for storage, path in zip(directory.storages, bag.files, strict=False):
                 self._add_storage(path, storage, compressed, counts=False)
             # Counts (and topics that no storage has) come from metadata.yaml.
             self._register(bag.path, directory.connections, counts=True)
         else:
-            from rosbags.rosbag2.storage_mcap import McapReader
-            from rosbags.rosbag2.storage_sqlite3 import Sqlite3Reader
+            self._open_storages(bag.kind, bag.files)
 
-            for path in bag.files:
-                storage = McapReader(path) if bag.kind == "mcap" else Sqlite3Reader(path)
-                self._enter(path, storage)
-                self._add_storage(path, storage, False, counts=True)
+    def _open_storages(self, kind: str, files: Sequence[Path]) -> None:
+        from rosbags.rosbag2.storage_mcap import McapReader
+        from rosbags.rosbag2.storage_sqlite3 import Sqlite3Reader
+
+        for path in files:
+            storage = McapReader(path) if kind == "mcap" else Sqlite3Reader(path)
+            self._enter(path, storage)
+            self._add_storage(path, storage, False, counts=True)
+
+    def _open_beside(self, bag: BagInput, failure: RostoolError) -> None:
+        """rosbags refused the directory although metadata.yaml passed our checks: when its storage files
+        open on their own, metadata.yaml was the problem; read them without it (one warning line)."""
+        kind = "mcap" if bag.storage == "mcap" else "db3"
+        if bag.metadata is None or any(sniff(path) != kind for path in bag.files):
+            raise failure
+        self._open_storages(kind, bag.files)  # when they fail too, their own error names the file
+        problem = str(failure).removeprefix(f"{bag.path}: ").removeprefix("cannot read bag: ")
+        warn(fallback_warning(bag.metadata, f"rejected by the rosbag2 reader: {problem}", bag.files))
 
     def _enter(self, path: Path, reader: Any) -> None:
         with guard(path):
@@ -155,6 +168,7 @@ class BagReader(AbstractContextManager["BagReader"]):
             if existing is None:
                 # The first file's own connection objects are ours: a single file needs no remapping.
                 self.connections.append(conn)
+                self._origin[id(conn)] = path
                 topic.connections.append(conn)
             if counts:
                 topic.count += conn.msgcount
@@ -224,7 +238,11 @@ class BagReader(AbstractContextManager["BagReader"]):
         return heapq.merge(*streams, key=lambda item: item[1])
 
     def deserialize(self, raw: bytes | memoryview, conn: Connection) -> object:
-        return self.resolver.deserialize(raw, conn.msgtype)
+        try:
+            return self.resolver.deserialize(raw, conn.msgtype)
+        except RostoolError as err:
+            where = self._origin.get(id(conn), self.paths[0])
+            raise RostoolError(f"{where}: {err}", err.exit_code) from err
 
     def close(self) -> None:
         self._stack.close()
@@ -329,29 +347,3 @@ def _raw_definitions(reader: Any) -> Iterator[tuple[str, str, str]]:
         yield schema.name, schema.encoding, schema.data
     for entry in getattr(reader, "msgtypes", []):  # Sqlite3Reader
         yield entry["name"], entry["encoding"], entry["msgdef"]
-
-
-class guard(AbstractContextManager["guard"]):
-    """Turns any failure of the underlying readers on a damaged file into one RostoolError line."""
-
-    def __init__(self, path: Path) -> None:
-        self.path = path
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        if exc is None or not isinstance(exc, Exception):
-            return
-        if isinstance(exc, (RostoolError, BrokenPipeError)):
-            return
-        text = describe(exc)
-        if "not indexed" in text:
-            raise RostoolError(
-                f"{self.path}: bag is not indexed (its recorder was killed?); run `rostool bag reindex`"
-            ) from exc
-        if any(word in text for word in ("magic", "damaged", "end of file", "Header could not")):
-            text += "; if the file was cut short, `rostool bag reindex` can rebuild it"
-        raise RostoolError(f"{self.path}: cannot read bag: {text}") from exc
