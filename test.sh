@@ -32,6 +32,9 @@ for distro in jazzy kilted; do
     "$venv/bin/python" -m pip install -q --disable-pip-version-check "${peer_packages[@]}"
     echo "${peer_packages[*]}" > "$venv/.installed"
   fi
+  # rostool itself (editable, with its dependencies) for the rclpy backend's tests: cheap, and on every
+  # run, since the checkout may have moved and the dependencies may have changed
+  "$venv/bin/python" -m pip install -q --disable-pip-version-check -e .
 done
 
 if [ ! -x .venv/bin/python ]; then

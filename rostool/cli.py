@@ -27,6 +27,11 @@ COMMANDS: dict[str, tuple[str, str, str]] = {
     "srv": ("rostool.commands.srv", "srv", "Show service types and their md5sums."),
     "action": ("rostool.commands.action", "action", "List actions, send goals, follow feedback, cancel."),
     "bag": ("rostool.commands.bag", "bag", "Inspect, play, record and convert bags (.bag, .db3, .mcap)."),
+    "doctor": (
+        "rostool.commands.doctor",
+        "doctor",
+        "Show the ROS version, ROS 2 backend, RMW, distro and domain in use, and why.",
+    ),
     "cheatsheet": (
         "rostool.commands.cheatsheet",
         "cheatsheet",
@@ -40,6 +45,7 @@ class Settings:
     """Options given before the verb, shared with every command through click's context."""
 
     ros_version: int | None = None
+    ros2_backend: str | None = None  # auto | rclpy | dds; None: ROSTOOL_ROS2_BACKEND, else auto
 
 
 class LazyGroup(click.Group):
@@ -97,10 +103,16 @@ def _silence_stdout() -> None:
     context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100},
 )
 @click.option("--ros1", "ros_version", flag_value=1, help="Talk to a ROS 1 graph.")
-@click.option("--ros2", "ros_version", flag_value=2, help="Talk to a ROS 2 graph (over DDS).")
+@click.option("--ros2", "ros_version", flag_value=2, help="Talk to a ROS 2 graph.")
+@click.option(
+    "--ros2-backend",
+    type=click.Choice(["auto", "rclpy", "dds"]),
+    help="ROS 2 through rclpy (your client library and RMW) or rostool's own DDS; auto: rclpy when it "
+    "imports (env ROSTOOL_ROS2_BACKEND). `rostool doctor` shows the choice.",
+)
 @click.version_option(__version__, prog_name="rostool")
 @click.pass_context
-def root(ctx: click.Context, ros_version: int | None) -> None:
+def root(ctx: click.Context, ros_version: int | None, ros2_backend: str | None) -> None:
     """rostool: rosnode, rostopic, rosparam, rosbag, rosservice and actionlib tools in one.
 
     Works with ROS 1 and ROS 2 graphs and with .bag, .db3 and .mcap bags, without a ROS installation.
@@ -114,7 +126,7 @@ def root(ctx: click.Context, ros_version: int | None) -> None:
       rostool param get /rosdistro
       rostool bag info test.bag
     """
-    ctx.obj = Settings(ros_version=ros_version)
+    ctx.obj = Settings(ros_version=ros_version, ros2_backend=ros2_backend)
 
 
 def main() -> None:

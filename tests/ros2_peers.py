@@ -201,3 +201,42 @@ def start_peer(distro: str, graph_env: dict[str, str], tmp_path: Path) -> Iterat
         addresses = peer.bound_addresses()
         peer.stop()
         assert_loopback_only(addresses)
+
+
+def rclpy_command(args: list[str], distro: str) -> list[str]:
+    """rostool on its rclpy backend, in the distro's peer venv (where test.sh installs it too)."""
+    return [str(peer_python(distro)), "-m", "rostool", "--ros2-backend", "rclpy", *args]
+
+
+def rostool_rclpy(
+    args: list[str], env: dict[str, str], tmp_path: Path, distro: str, timeout: float = 30
+) -> subprocess.CompletedProcess[str]:
+    """Run rostool's rclpy backend as the peers run: the test's domain, Fast DDS on loopback only."""
+    return subprocess.run(
+        rclpy_command(args, distro),
+        env=peer_env(env, tmp_path),
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+    )
+
+
+def rostool_rclpy_popen(
+    args: list[str], env: dict[str, str], tmp_path: Path, distro: str
+) -> subprocess.Popen[str]:
+    return subprocess.Popen(
+        rclpy_command(args, distro),
+        env=peer_env(env, tmp_path),
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+
+
+def bound_addresses(pid: int) -> list[str]:
+    """Local addresses of the UDP and TCP sockets process `pid` has open (from `ss`)."""
+    found = []
+    for proto in ("-uanp", "-tanp"):
+        out = subprocess.run(["ss", proto], capture_output=True, text=True).stdout
+        found += [line.split()[3] for line in out.splitlines() if f"pid={pid}," in line]
+    return found

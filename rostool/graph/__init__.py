@@ -43,14 +43,34 @@ def interface_paths_from_env() -> tuple[str, ...]:
     return tuple(p for p in value.split(os.pathsep) if p.strip())
 
 
+def selected_ros2_backend() -> str | None:
+    """`--ros2-backend` of the running command (None outside the CLI or when not given)."""
+    import click
+
+    ctx = click.get_current_context(silent=True)
+    settings = ctx.find_root().obj if ctx is not None else None
+    return getattr(settings, "ros2_backend", None)
+
+
 def open_graph(
-    explicit_version: int | None, node_name: str = "rostool", interface_paths: Sequence[str] = ()
+    explicit_version: int | None,
+    node_name: str = "rostool",
+    interface_paths: Sequence[str] = (),
+    ros2_backend: str | None = None,
 ) -> Graph:
     """Connect to the live graph of the selected ROS version. Types missing from the built-in ones are looked
-    for in `interface_paths` (default: ROSTOOL_INTERFACES), ROS_PACKAGE_PATH and the workspace."""
+    for in `interface_paths` (default: ROSTOOL_INTERFACES), ROS_PACKAGE_PATH and the workspace. ROS 2 goes
+    through rclpy or rostool's DDS as `ros2_backend` (default: --ros2-backend, ROSTOOL_ROS2_BACKEND, auto)
+    chooses."""
     version = select_ros_version(explicit_version)
     interface_paths = tuple(interface_paths) or interface_paths_from_env()
     if version == 2:
+        from rostool.graph.rclpy.select import choose
+
+        if choose(ros2_backend or selected_ros2_backend()).backend == "rclpy":
+            from rostool.graph.rclpy.graph import RclpyGraph
+
+            return RclpyGraph(node_name, interface_paths=interface_paths)
         from rostool.graph.ros2.graph import Ros2Graph
 
         return Ros2Graph(node_name, interface_paths=interface_paths)

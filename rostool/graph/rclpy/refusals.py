@@ -1,0 +1,65 @@
+"""What the rclpy backend does not do yet: one line each, naming the DDS backend, which does it."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+from rostool.errors import RostoolError
+
+
+def not_yet(what: str) -> RostoolError:
+    return RostoolError(f"{what} is not available with the rclpy backend yet; use --ros2-backend dds")
+
+
+class NotYet:
+    def ping(self, name: str) -> float:
+        raise RostoolError("ROS 2 nodes cannot be pinged (there is no node API); try `rostool node info`")
+
+    def kill(self, name: str) -> None:
+        raise RostoolError("ROS 2 nodes cannot be killed remotely (there is no node API); stop the process")
+
+    def raw_publisher(self, topic: str, wire_type: Any, latch: bool = False) -> Any:
+        raise not_yet("bag play")
+
+    def record_source(self, warn: Callable[[str], None], include_hidden: bool = False) -> Any:
+        raise not_yet("bag record")
+
+    def services(self) -> list[tuple[str, str | None, list[str]]]:
+        raise not_yet("service list")
+
+    def service_type(self, name: str) -> str:
+        raise not_yet("service type")
+
+    def service_uri(self, name: str) -> str:
+        raise not_yet("service uri")
+
+    def service_nodes(self, name: str) -> list[str]:
+        raise not_yet("service node")
+
+    def service_args(self, name: str) -> str:
+        raise not_yet("service args")
+
+    def service_info(self, name: str) -> dict[str, Any] | None:
+        raise not_yet("service info")
+
+    def find_services(self, type_name: str) -> list[str]:
+        raise not_yet("service find")
+
+    def service_call(self, name: str, values: tuple[str, ...], wait: bool, timeout: float | None) -> Any:
+        raise not_yet("service call")
+
+    def actions(self) -> list[Any]:
+        raise not_yet("action list")
+
+    def action_info(self, name: str, wait: float) -> dict[str, Any]:
+        raise not_yet("action info")
+
+    def send_goal(self, name: str, kind: str | None, goal: Any, timeout: float | None, w: Any) -> Any:
+        raise not_yet("action send-goal")
+
+    def cancel_goals(self, name: str, goal_id: str | None) -> list[Any]:
+        raise not_yet("action cancel")
+
+    def parameters(self, node: str | None, timeout: float = 5.0) -> Any:
+        raise not_yet("param")

@@ -1,0 +1,81 @@
+"""Message types for the rclpy backend: the Python classes rclpy imports (it needs one per publisher and
+subscription), and their twins in rosbags' store, which makes and reads every byte.
+
+A type rosbags' distro store lacks is described to it from the imported class itself
+(`get_fields_and_field_types()`), so whatever rclpy can import, rostool can decode and encode too.
+"""
+
+from __future__ import annotations
+
+import importlib
+import re
+from typing import Any
+
+from rostool.errors import RostoolError
+from rostool.graph.rclpy.select import WAY_OUT
+
+_PRIMITIVES = {"boolean": "bool", "octet": "byte", "float": "float32", "double": "float64"}
+_SEQUENCE = re.compile(r"sequence<(.+?)(?:, (\d+))?>")
+_ARRAY = re.compile(r"(.+)\[(\d+)\]")
+
+
+def python_class(store_name: str) -> Any:
+    """The rclpy message class of `pkg/msg/Type` (or `pkg/srv/...`), or one line naming the package and the
+    two ways out."""
+    pkg, kind, name = store_name.split("/")
+    try:
+        module = importlib.import_module(f"{pkg}.{kind}")
+    except Exception:
+        raise RostoolError(
+            f"type {store_name}: rclpy cannot import the Python package {pkg!r} here; source the workspace "
+            f"that builds {pkg}, or {WAY_OUT}, which reads .msg sources and asks publishers for their types"
+        ) from None
+    found = getattr(module, name, None)
+    if found is None:
+        raise RostoolError(f"unknown type {store_name}: the {pkg} package rclpy imports has no {kind} {name}")
+    return found
+
+
+def ensure_known(types: Any, store_name: str) -> None:
+    """Make `store_name` known to rosbags' store (`types`: a ros2 TypeSupport), from source files as the DDS
+    backend finds them, else from the class rclpy imports."""
+    if types.knows(store_name):
+        return
+    from rosbags.typesys import get_types_from_msg
+
+    fields, nested = describe(python_class(store_name))
+    for inner in nested:
+        ensure_known(types, inner)
+    text = "\n".join(f"{kind} {name}" for name, kind in fields)
+    types.register(get_types_from_msg(text, store_name))
+
+
+def describe(cls: Any) -> tuple[list[tuple[str, str]], list[str]]:
+    """(fields as (name, .msg type), nested message types) of an rclpy message class."""
+    fields: list[tuple[str, str]] = []
+    nested: list[str] = []
+    for name, idl in cls.get_fields_and_field_types().items():
+        kind, inner = _msg_type(idl)
+        fields.append((name, kind))
+        nested += inner
+    return fields, nested
+
+
+def _msg_type(idl: str) -> tuple[str, list[str]]:
+    found = _SEQUENCE.fullmatch(idl)
+    if found:
+        base, nested = _base(found[1])
+        return base + (f"[<={found[2]}]" if found[2] else "[]"), nested
+    found = _ARRAY.fullmatch(idl)
+    if found:
+        base, nested = _base(found[1])
+        return f"{base}[{found[2]}]", nested
+    return _base(idl)
+
+
+def _base(idl: str) -> tuple[str, list[str]]:
+    if "/" in idl:
+        pkg, _, name = idl.rpartition("/")
+        store_name = f"{pkg}/{name}" if pkg.count("/") else f"{pkg}/msg/{name}"
+        return idl, [store_name]
+    return _PRIMITIVES.get(idl, idl), []

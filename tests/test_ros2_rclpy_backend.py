@@ -1,0 +1,311 @@
+"""The rclpy backend (`--ros2-backend rclpy`): selection, `doctor`, bad input, and the topic and node verbs
+against real rclpy nodes of Jazzy and Kilted (Fast DDS), with the same checks as test_ros2_real_topics.py.
+
+rostool runs in the distro's peer venv (test.sh installs it there) with the peers' loopback-only Fast DDS
+profile; where the argument forms are the same, its output must equal the DDS backend's.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import subprocess
+import sys
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+
+from tests.ros2_peers import (
+    RclpyPeer,
+    assert_loopback_only,
+    bound_addresses,
+    peer_env,
+    peer_python,
+    rostool_rclpy,
+    rostool_rclpy_popen,
+)
+from tests.support import rostool, stop
+
+Start = Callable[..., RclpyPeer]
+
+
+def docs(text: str) -> list[str]:
+    return [doc.strip() for doc in text.split("---") if doc.strip()]
+
+
+# the middleware's own log lines (Jazzy's rmw_fastrtps warns that FASTRTPS_DEFAULT_PROFILES_FILE, which the
+# peers' environment sets for Fast DDS 2, is deprecated): the user's RMW speaking, not rostool
+RMW_LOG = re.compile(r"^\[(WARN|INFO)\] \[[\d.]+\] \[rmw_")
+
+
+def one_error_line(done: subprocess.CompletedProcess[str], *words: str) -> str:
+    assert done.returncode != 0, done.stdout
+    lines = [
+        line
+        for line in done.stderr.strip().splitlines()
+        if not line.startswith("WARNING: ") and not RMW_LOG.match(line)
+    ]
+    assert len(lines) == 1, done.stderr
+    assert "Traceback" not in done.stderr
+    for word in words:
+        assert word in lines[0], (word, lines[0])
+    return lines[0]
+
+
+# --- selection, doctor and bad input ---------------------------------------------------------------
+
+
+def test_without_rclpy_auto_is_dds_and_rclpy_is_one_line(graph_env: dict[str, str]) -> None:
+    """The test venv has no rclpy: auto serves ROS 2 with the DDS backend, and asking for rclpy fails in
+    one line naming the way out."""
+    report = json.loads(rostool(["doctor", "--json"], graph_env).stdout)
+    assert report["ros_version"] == 2
+    assert report["ros2"]["backend"] == "dds" and "rclpy is not installed" in report["ros2"]["reason"]
+    assert report["ros2"]["domain_id"] == int(graph_env["ROS_DOMAIN_ID"])
+    assert report["ros2"]["discovery_range"] == "LOCALHOST"
+    asked = rostool(["--ros2-backend", "rclpy", "topic", "list"], graph_env)
+    one_error_line(asked, "rclpy is not installed", "--ros2-backend dds")
+    by_env = rostool(["topic", "list"], {**graph_env, "ROSTOOL_ROS2_BACKEND": "rclpy"})
+    one_error_line(by_env, "rclpy is not installed", "--ros2-backend dds")
+    bad = {**graph_env, "ROSTOOL_ROS2_BACKEND": "fast"}
+    one_error_line(rostool(["topic", "list"], bad), "ROSTOOL_ROS2_BACKEND='fast'", "auto, rclpy, dds")
+    doctor = rostool(["doctor"], bad)  # doctor shows the problem in its report, and fails
+    assert doctor.returncode == 1 and "ROSTOOL_ROS2_BACKEND='fast' is not valid" in doctor.stdout
+
+
+def test_broken_rclpy_falls_back_in_auto_and_is_one_line_when_asked(
+    graph_env: dict[str, str], tmp_path: Path
+) -> None:
+    """rclpy present but not importable (as a ROS 2 sourced for another Python is): auto uses DDS and
+    doctor says why; --ros2-backend rclpy is one line naming it and the way out."""
+    fake = tmp_path / "site" / "rclpy"
+    fake.mkdir(parents=True)
+    (fake / "__init__.py").write_text("raise ImportError(\"No module named 'rclpy._rclpy_pybind11'\")\n")
+    env = {**graph_env, "PYTHONPATH": str(fake.parent)}
+    report = json.loads(rostool(["doctor", "--json"], env).stdout)
+    assert report["ros2"]["backend"] == "dds"
+    assert "does not import" in report["ros2"]["reason"] and "_rclpy_pybind11" in report["ros2"]["reason"]
+    line = one_error_line(rostool(["--ros2-backend", "rclpy", "node", "list"], env), "--ros2-backend dds")
+    assert "_rclpy_pybind11" in line and f"Python {sys.version_info.major}.{sys.version_info.minor}" in line
+    doctor = rostool(["--ros2-backend", "rclpy", "doctor"], env)
+    assert doctor.returncode == 1 and "_rclpy_pybind11" in doctor.stdout
+
+
+def test_help_imports_neither_backend(distro: str) -> None:
+    probe = (
+        "import sys, io, contextlib\n"
+        "from rostool.cli import root\n"
+        "with contextlib.redirect_stdout(io.StringIO()):\n"
+        "    try:\n        root.main(['--help'])\n    except SystemExit:\n        pass\n"
+        "print([m for m in ('rclpy', 'cyclonedds', 'rostool.graph') if m in sys.modules])"
+    )
+    out = subprocess.run([str(peer_python(distro)), "-c", probe], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"
+
+
+def test_doctor_reports_rclpy_and_the_choice(graph_env: dict[str, str], tmp_path: Path, distro: str) -> None:
+    env = peer_env(graph_env, tmp_path)
+    python = str(peer_python(distro))
+
+    def doctor(*args: str, **extra: str) -> dict:
+        done = subprocess.run([python, "-m", "rostool", *args, "doctor", "--json"], env={**env, **extra},
+                              capture_output=True, text=True, timeout=30)  # fmt: skip
+        assert done.returncode == 0, done.stderr
+        return json.loads(done.stdout)["ros2"]  # type: ignore[no-any-return]
+
+    auto = doctor()
+    assert (auto["backend"], auto["reason"]) == ("rclpy", "auto: rclpy imports")
+    assert (auto["rmw"], auto["distro"]) == ("rmw_fastrtps_cpp", distro)
+    assert auto["domain_id"] == int(graph_env["ROS_DOMAIN_ID"]) and auto["domain_id_from"] == "ROS_DOMAIN_ID"
+    assert auto["discovery_range"] == "SUBNET"  # ROS 2's default: rmw reads the variable, none is set
+    assert auto["middleware_settings"]["FASTDDS_DEFAULT_PROFILES_FILE"].endswith("fastdds_loopback.xml")
+    assert doctor(ROSTOOL_ROS2_BACKEND="dds")["backend"] == "dds"
+    assert (
+        doctor("--ros2-backend", "dds", ROSTOOL_ROS2_BACKEND="rclpy")["reason"]
+        == "asked for by --ros2-backend"
+    )
+    text = subprocess.run([python, "-m", "rostool", "doctor"], env=env, capture_output=True, text=True).stdout
+    assert re.search(r"^RMW +: rmw_fastrtps_cpp \(RMW_IMPLEMENTATION\)$", text, re.M), text
+
+
+def test_unknown_rmw_and_bad_domain_are_one_line(
+    graph_env: dict[str, str], tmp_path: Path, distro: str
+) -> None:
+    """librcl ends the process (exit 102) when RMW_IMPLEMENTATION names a missing library: rostool checks
+    first and says so in one line."""
+    for extra, words in (
+        ({"RMW_IMPLEMENTATION": "rmw_bogus_cpp"}, ("rmw_bogus_cpp", "installed: rmw_fastrtps_cpp", "dds")),
+        ({"ROS_DOMAIN_ID": "999"}, ("ROS_DOMAIN_ID",)),
+    ):
+        env = {**peer_env(graph_env, tmp_path), **extra}  # peer_env names rmw_fastrtps_cpp: replace it
+        command = [str(peer_python(distro)), "-m", "rostool", "--ros2-backend", "rclpy", "topic", "list"]
+        done = subprocess.run(command, env=env, capture_output=True, text=True, timeout=30)
+        assert done.returncode == 1, done
+        one_error_line(done, *words)
+
+
+# --- the verbs against real nodes ------------------------------------------------------------------
+
+
+@pytest.fixture
+def rclpy_tool(
+    graph_env: dict[str, str], tmp_path: Path, distro: str
+) -> Callable[..., subprocess.CompletedProcess[str]]:
+    def run(*args: str, timeout: float = 30) -> subprocess.CompletedProcess[str]:
+        return rostool_rclpy(list(args), graph_env, tmp_path, distro, timeout=timeout)
+
+    return run
+
+
+Tool = Callable[..., subprocess.CompletedProcess[str]]
+
+
+def test_topic_list_type_find_as_the_dds_backend(
+    graph_env: dict[str, str], start_peer: Start, rclpy_tool: Tool
+) -> None:
+    start_peer("--name", "talker", "--talk", "/chatter", "--listen", "/heard")
+    for _ in range(3):
+        listed = rclpy_tool("topic", "list")
+        assert "/chatter" in listed.stdout.split(), listed.stderr
+    # node names only where the DDS backend waits for them too (its listing does not wait for Fast DDS's
+    # ros_discovery_info, and may show _NODE_NAME_UNKNOWN_ where rmw knows the node)
+    for args in (["topic", "list", "-v"], ["topic", "type", "/chatter"],
+                 ["topic", "find", "std_msgs/msg/String"], ["topic", "info", "/chatter"]):  # fmt: skip
+        mine = rclpy_tool(*args)
+        assert mine.returncode == 0, (args, mine.stderr)
+        assert mine.stdout == rostool(args, graph_env).stdout, args
+    assert " * /chatter [std_msgs/msg/String] 1 publisher" in rclpy_tool("topic", "list", "-v").stdout
+    assert rclpy_tool("topic", "find", "std_msgs/String").stdout == "/chatter\n/heard\n"
+    listed = {t["name"]: t for t in json.loads(rclpy_tool("topic", "list", "--json").stdout)}
+    chatter = {"name": "/chatter", "type": "std_msgs/msg/String", "publishers": ["/talker"]}
+    assert listed["/chatter"] == {**chatter, "subscribers": []}
+    assert listed["/heard"]["subscribers"] == ["/talker"]
+
+
+def test_node_list_and_info_as_the_dds_backend(
+    graph_env: dict[str, str], start_peer: Start, rclpy_tool: Tool
+) -> None:
+    start_peer("--name", "talker", "--namespace", "/robot", "--talk", "/chatter", "--listen", "/heard")
+    nodes = rclpy_tool("node", "list")
+    assert nodes.stdout == "/robot/talker\n", nodes.stderr
+    info = json.loads(rclpy_tool("node", "info", "/robot/talker", "--json").stdout)
+    assert {"name": "/chatter", "type": "std_msgs/msg/String"} in info["publishers"]
+    assert {"name": "/heard", "type": "std_msgs/msg/String"} in info["subscribers"]
+    assert "/robot/talker/list_parameters" in [s["name"] for s in info["service_servers"]]
+    text = rclpy_tool("node", "info", "/robot/talker").stdout
+    assert text.splitlines()[0] == "/robot/talker" and "    /chatter: std_msgs/msg/String" in text
+    assert text == rostool(["node", "info", "/robot/talker"], graph_env).stdout
+
+
+def test_topic_info_verbose_names_the_real_node(start_peer: Start, rclpy_tool: Tool) -> None:
+    start_peer("--name", "talker", "--talk", "/chatter", "--best-effort", "--depth", "7")
+    detail = rclpy_tool("topic", "info", "/chatter", "-v", "--json")
+    (endpoint,) = json.loads(detail.stdout)["endpoints"]
+    assert endpoint["node"] == "/talker"
+    assert endpoint["endpoint_type"] == "PUBLISHER"
+    assert endpoint["qos"]["reliability"] == "best_effort"
+    assert endpoint["qos"]["depth"] is None  # Fast DDS does not announce its history: unknown, as ros2 says
+    assert endpoint["type_hash"] == "RIHS01_df668c740482bbd48fb39d76a70dfd4bd59db1288021743503259e948f6b1a18"
+    assert re.fullmatch(r"([0-9a-f]{2}\.){15}[0-9a-f]{2}", endpoint["gid"])
+    text = rclpy_tool("topic", "info", "/chatter", "-v").stdout
+    assert "Reliability: BEST_EFFORT" in text and "History (Depth): UNKNOWN" in text
+
+
+def test_echo_receives_the_real_publishers_messages(start_peer: Start, rclpy_tool: Tool) -> None:
+    start_peer("--name", "talker", "--talk", "/chatter", "--rate", "20")
+    echo = rclpy_tool("topic", "echo", "/chatter", "-n", "3", "--json")
+    assert echo.returncode == 0, echo.stderr
+    numbers = [int(json.loads(line)["data"].removeprefix("hello ")) for line in echo.stdout.splitlines()]
+    assert numbers == list(range(numbers[0], numbers[0] + 3))
+    text = rclpy_tool("topic", "echo", "/chatter", "-n", "1").stdout
+    assert re.fullmatch(r"data: hello \d+\n---\n", text), text
+
+
+def test_echo_of_a_latched_best_effort_mix_adapts(start_peer: Start, rclpy_tool: Tool) -> None:
+    """A transient_local publisher: echo adapts and gets the message sent before it started."""
+    start_peer("--name", "latcher", "--talk", "/latched", "--latched", "--count", "1")
+    echo = rclpy_tool("topic", "echo", "/latched", "-n", "1", "--json", "--timeout", "10")
+    assert echo.returncode == 0, echo.stderr
+    assert json.loads(echo.stdout)["data"].startswith("hello ")
+
+
+def test_hz_at_10_hz_and_1_khz(start_peer: Start, rclpy_tool: Tool) -> None:
+    """hz agrees within 2 % with the rate the publisher itself counted over the same seconds."""
+    talkers = {"/slow": start_peer("--name", "slow", "--talk", "/slow", "--rate", "10")}
+    talkers["/fast"] = start_peer("--name", "fast", "--talk", "/fast", "--rate", "1000", "--depth", "1000")
+    for topic, peer in talkers.items():
+        before = len(peer.of("published"))
+        out = rclpy_tool("topic", "hz", topic, "--json", "--duration", "5.2").stdout
+        reports = [json.loads(line) for line in out.splitlines()]
+        assert reports, out
+        during = peer.of("published")[before + 1 :]
+        true_rate = (during[-1]["count"] - during[0]["count"]) / (during[-1]["t"] - during[0]["t"])
+        assert abs(reports[-1]["rate"] - true_rate) / true_rate < 0.02, (topic, true_rate, reports[-1])
+
+
+def test_bw_measures_the_real_cdr_size(start_peer: Start, rclpy_tool: Tool) -> None:
+    start_peer("--name", "talker", "--talk", "/chatter", "--rate", "20")
+    out = rclpy_tool("topic", "bw", "/chatter", "--duration", "2.2").stdout
+    means = re.findall(r"mean: ([\d.]+)B", out)  # the same 20 bytes the DDS backend measures
+    assert means and float(means[-1]) == 20.0, out
+
+
+def test_pub_reaches_the_real_subscriber(
+    graph_env: dict[str, str], tmp_path: Path, distro: str, start_peer: Start, rclpy_tool: Tool
+) -> None:
+    peer = start_peer("--name", "listener", "--listen", "/heard")
+    once = rclpy_tool("topic", "pub", "/heard", "std_msgs/msg/String", "data: from rostool", "-1")
+    assert once.returncode == 0, once.stderr
+    assert peer.wait_for("heard")["data"] == "from rostool"
+    again = ["topic", "pub", "/heard", "std_msgs/String", "data: again", "-r", "20"]
+    repeated = rostool_rclpy_popen(again, graph_env, tmp_path, distro)
+    try:
+        peer.wait_for("heard", lambda e: e["data"] == "again")
+        addresses = bound_addresses(repeated.pid)
+    finally:
+        stop(repeated)
+    assert addresses
+    assert_loopback_only(addresses)
+
+
+def test_a_real_node_sees_rostool_as_a_node(
+    graph_env: dict[str, str], tmp_path: Path, distro: str, start_peer: Start
+) -> None:
+    """Unlike the DDS backend's endpoints, which a Kilted node files under no node, rclpy's are its node's."""
+    watcher = start_peer("--name", "watcher", "--watch")
+    pub = rostool_rclpy_popen(["topic", "pub", "/from_rostool", "std_msgs/String", "data: x", "-r", "5"],
+                              graph_env, tmp_path, distro)  # fmt: skip
+    echo = rostool_rclpy_popen(["topic", "echo", "/from_rostool"], graph_env, tmp_path, distro)
+    me_pub, me_sub = f"/rostool_{pub.pid}", f"/rostool_{echo.pid}"
+    try:
+
+        def complete(event: dict) -> bool:
+            return (
+                me_pub in event["nodes"]
+                and me_sub in event["nodes"]
+                and event["publishers"].get("/from_rostool") == [me_pub]
+                and event["subscribers"].get("/from_rostool") == [me_sub]
+                and event["topics"].get("/from_rostool") == ["std_msgs/msg/String"]
+            )
+
+        try:
+            watcher.wait_for("graph", complete, timeout=20)
+        except AssertionError:
+            raise AssertionError(f"{me_pub}, {me_sub} not in {watcher.of('graph')[-1:]}") from None
+    finally:
+        stop(pub)
+        stop(echo)
+
+
+def test_bad_input_on_a_real_graph(start_peer: Start, rclpy_tool: Tool) -> None:
+    start_peer("--name", "talker", "--talk", "/chatter")
+    for args, words in (
+        (["node", "info", "/nobody"], "/nobody"),
+        (["topic", "echo", "/nothing", "--timeout", "1"], "no message"),
+        (["topic", "pub", "/chatter", "std_msgs/msg/Nope", "data: 1", "-1"], "std_msgs/msg/Nope"),
+        (["topic", "pub", "/x", "nothere_msgs/msg/Thing", "a: 1", "-1"], "nothere_msgs"),
+        (["service", "list"], "--ros2-backend dds"),
+        (["param", "list", "/talker"], "--ros2-backend dds"),
+    ):
+        one_error_line(rclpy_tool(*args, timeout=20), words)
