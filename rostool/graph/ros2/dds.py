@@ -20,6 +20,7 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 from rostool.errors import RostoolError
+from rostool.graph import qos
 
 DOMAIN_ID_MAX = 232  # ROS 2's documented maximum: higher ids map to UDP ports past the usable range
 RANGES = ("LOCALHOST", "SUBNET", "OFF", "SYSTEM_DEFAULT")
@@ -167,17 +168,8 @@ PROFILES: dict[str, QosProfile] = {
 
 
 @dataclass(frozen=True)
-class QosRequest:
-    """What the user asked for on the command line (None: not given)."""
-
-    profile: str | None = None
-    reliability: str | None = None
-    durability: str | None = None
-    depth: int | None = None
-
-    @property
-    def given(self) -> bool:
-        return any(v is not None for v in (self.profile, self.reliability, self.durability, self.depth))
+class QosRequest(qos.QosRequest):
+    """The user's request (rostool.graph.qos) with the DDS profiles it stands for."""
 
     def base(self) -> QosProfile:
         return PROFILES[self.profile or "default"]
