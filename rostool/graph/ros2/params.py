@@ -148,6 +148,8 @@ class ParameterClient:
     def values(self, names: list[str]) -> list[Any]:
         """The ParameterValue of each name, in order (NOT_SET for the ones the node does not have)."""
         response = self._call("get_parameters", {"names": names})
+        if not response.values and names:  # rclpy answers an undeclared name with no values at all
+            raise RostoolError(f"parameter not set: node {self.node} has no parameter {', '.join(names)}")
         if len(response.values) != len(names):
             raise RostoolError(
                 f"node {self.node} returned {len(response.values)} values for {len(names)} names"

@@ -88,6 +88,9 @@ class Ros2Verbs:
         request = self.build_message(client.request_type, _request_value(self, client.request_type, values))
         remaining = max(deadline - time.monotonic(), 0.001)
         if not client.wait_for_server(remaining):
+            announced, asked = self.find_service_type(resolved), client.request_type.removesuffix("_Request")
+            if announced is not None and announced != asked:
+                raise RostoolError(f"service {resolved} has type {announced}, not {asked}: call it with that")
             hint = "" if wait else " (--wait waits for it)"
             raise RostoolError(
                 f"service {resolved} is not available: no server matched within {limit:g} s{hint}"
