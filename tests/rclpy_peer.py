@@ -10,6 +10,9 @@ every ROS 2 test. It takes roles from its arguments and reports what it sees as 
     {"event": "published", "count": N, "t": T}           --talk: about once a second (monotonic time)
     {"event": "sent", "count": N, "seconds": S}          --talk with --count: after the burst
     {"event": "counted", "count": N, "first": T, "last": T}  --raw-count: every 0.5 s
+    (no events)                                          --repeat TYPE=TOPIC: default TYPE messages at 1 Hz
+                                                         --hello TOPIC: 'Hello World: N' at 1 Hz
+                                                         --cmd-vel TOPIC: TwistStamped, stamp now, linear.x 1
 
 Not a pytest module: tests start it through tests/ros2_peers.py.
 """
@@ -116,6 +119,39 @@ class Peer(Node):
             ActionServer(self, Fibonacci, args.action, self.on_goal, cancel_callback=self.on_cancel)
         if args.watch:
             self.create_timer(0.5, self.report_graph)
+        for spec in args.repeat:  # as ros2cli's repeater fixture: a default-constructed message each second
+            import importlib
+
+            type_name, _, topic = spec.partition("=")
+            package, _, name = type_name.split("/")
+            cls = getattr(importlib.import_module(f"{package}.msg"), name)
+            publisher = self.create_publisher(cls, topic, 10)
+            self.create_timer(1.0, lambda p=publisher, c=cls: p.publish(c()))
+        if args.hello:
+            from std_msgs.msg import String
+
+            self.hello = self.create_publisher(String, args.hello, 10)
+            self.hello_count = 0
+            self.create_timer(1.0, self.tick_hello)
+        if args.cmd_vel:
+            from geometry_msgs.msg import TwistStamped
+
+            self.cmd_vel = self.create_publisher(TwistStamped, args.cmd_vel, 10)
+            self.create_timer(1.0, self.tick_cmd_vel)
+
+    def tick_hello(self) -> None:
+        from std_msgs.msg import String
+
+        self.hello_count += 1
+        self.hello.publish(String(data=f"Hello World: {self.hello_count}"))
+
+    def tick_cmd_vel(self) -> None:
+        from geometry_msgs.msg import TwistStamped
+
+        message = TwistStamped()
+        message.header.stamp = self.get_clock().now().to_msg()
+        message.twist.linear.x = 1.0
+        self.cmd_vel.publish(message)
 
     def tick(self) -> None:
         self.count += 1
@@ -232,6 +268,10 @@ def main() -> None:
     parser.add_argument("--action", help="serve test_msgs/action/Fibonacci here")
     parser.add_argument("--step", type=float, default=0.1, help="seconds between Fibonacci feedbacks")
     parser.add_argument("--watch", action="store_true", help="report the graph every 0.5 s")
+    parser.add_argument("--repeat", action="append", default=[], metavar="TYPE=TOPIC",
+                        help="publish a default pkg/msg/Type message on TOPIC every second")
+    parser.add_argument("--hello", help="publish std_msgs/String 'Hello World: N' here at 1 Hz")
+    parser.add_argument("--cmd-vel", help="publish geometry_msgs/TwistStamped (stamp now, x 1) at 1 Hz")
     args = parser.parse_args()
     rclpy.init()
     node = Peer(args)

@@ -1,8 +1,10 @@
-"""`rostool node`: list, info, ping, kill (rosnode's forms)."""
+"""`rostool node`: list, info, ping, kill (rosnode's forms under ROS 1, ros2 node's under ROS 2)."""
 
 from __future__ import annotations
 
+import functools
 import time
+from typing import Any
 
 import click
 
@@ -12,7 +14,11 @@ from rostool.graph.base import NodeInfo
 
 @click.group()
 def node() -> None:
-    """Inspect and stop nodes (like rosnode).
+    """Inspect and stop nodes (like rosnode, or ros2 node).
+
+    Flags and output follow the selected ROS version (--ros1/--ros2, ROS_VERSION, detection): rosnode's
+    forms under ROS 1, ros2 node's under ROS 2; --json works in both. ros2cli flags with no meaning here
+    (--no-daemon, --spin-time, -s/--use-sim-time) are accepted and ignored.
 
     \b
     Examples:
@@ -23,41 +29,92 @@ def node() -> None:
     """
 
 
+def _ignored(func: Any) -> Any:
+    """ros2cli's node options with no meaning here: accepted, said so in --help, ignored."""
+    options = (
+        click.option("--no-daemon", is_flag=True, help="Accepted and ignored (rostool has no daemon)."),
+        click.option("--spin-time", type=float, metavar="S",
+                     help="Accepted and ignored (rostool waits for discovery to settle itself)."),
+        click.option("-s", "--use-sim-time", is_flag=True, help="Accepted and ignored (wall clock)."),
+    )  # fmt: skip
+
+    @functools.wraps(func)
+    def wrapper(
+        *args: Any, no_daemon: bool, spin_time: float | None, use_sim_time: bool, **kwargs: Any
+    ) -> Any:
+        return func(*args, **kwargs)
+
+    for option in reversed(options):
+        wrapper = option(wrapper)
+    return wrapper
+
+
 @node.command("list")
+@click.option(
+    "-a",
+    "--all",
+    "show_all",
+    is_flag=True,
+    help="ROS 1: each node with its XML-RPC URI. ROS 2: hidden nodes (a name part starting with _) too.",
+)
+@click.option("-c", "--count-nodes", is_flag=True, help="Only the number of nodes.")
 @json_option
+@_ignored
 @click.pass_context
-def list_nodes(ctx: click.Context, as_json: bool) -> None:
-    """List the nodes registered with the master.
+def list_nodes(ctx: click.Context, show_all: bool, count_nodes: bool, as_json: bool) -> None:
+    """List the nodes of the live graph.
 
     \b
-    Example:
+    Examples:
       rostool node list
+      rostool --ros2 node list -a -c
     """
+    from rostool.graph.base import hidden_name
+
     with live_graph(ctx) as graph:
         names = graph.node_names()
+        ros2 = graph.style == "ros2"
+        if ros2 and not show_all:
+            names = [n for n in names if not hidden_name(n)]
+        uris = {n: graph.node_uri(n) for n in names} if show_all and not ros2 and not count_nodes else {}
+    if count_nodes:
+        click.echo(str(len(names)))
+        return
     if as_json:
         print_json(names)
         return
     for name in names:
-        click.echo(name)
+        click.echo(f"{uris[name]} \t{name}" if name in uris else name)
 
 
 @node.command("info")
 @click.argument("name")
+@click.option("--include-hidden", is_flag=True, help="ROS 2: hidden nodes, topics and services too.")
 @json_option
+@_ignored
 @click.pass_context
-def info(ctx: click.Context, name: str, as_json: bool) -> None:
+def info(ctx: click.Context, name: str, include_hidden: bool, as_json: bool) -> None:
     """Show a node's publications, subscriptions, services and connections.
 
     \b
     Example:
       rostool node info /hello_world_pub_node
     """
+    from rostool.errors import RostoolError
+    from rostool.graph.base import hidden_name
+
     with live_graph(ctx) as graph:
-        details = graph.node_info(name)
         if graph.style == "ros2":
-            _info_ros2(details, as_json)
+            resolved = graph.resolve(name)
+            if hidden_name(resolved) and not include_hidden:
+                raise RostoolError(f"Unable to find node '{resolved}'")
+            try:
+                details = graph.node_info(name)
+            except RostoolError as err:
+                raise RostoolError(f"Unable to find node '{resolved}'") from err
+            _info_ros2(details, as_json, include_hidden)
             return
+        details = graph.node_info(name)
         uris = {n: graph.node_uri(n) for n in graph.node_names()}
     if as_json:
         print_json(
@@ -97,13 +154,31 @@ def info(ctx: click.Context, name: str, as_json: bool) -> None:
     click.echo("\n".join(lines) + "\n")
 
 
-def _info_ros2(details: NodeInfo, as_json: bool) -> None:
-    """ros2 node info's form: the node's endpoints grouped by kind, with their types."""
+_SEND_GOAL = "/_action/send_goal"
+
+
+def _actions(services: list[tuple[str, str]]) -> list[tuple[str, str]]:
+    """Actions told by their send_goal service: (/fibonacci, pkg/action/Fibonacci)."""
+    return sorted(
+        (n.removesuffix(_SEND_GOAL), t.removesuffix("_SendGoal"))
+        for n, t in services
+        if n.endswith(_SEND_GOAL)
+    )
+
+
+def _info_ros2(details: NodeInfo, as_json: bool, include_hidden: bool = False) -> None:
+    """ros2 node info's form: the node's endpoints grouped by kind, with their types; actions are told by
+    their hidden services, which (as every hidden name) show only with --include-hidden."""
+    from rostool.graph.base import hidden_name
+
+    def shown(entries: list[tuple[str, str]]) -> list[tuple[str, str]]:
+        return sorted(e for e in entries if include_hidden or not hidden_name(e[0]))
+
     servers = [(s, details.service_types.get(s, "?")) for s in details.services]
     groups: tuple[tuple[str, list[tuple[str, str]]], ...] = (
-        ("Subscribers", details.subscriptions), ("Publishers", details.publications),
-        ("Service Servers", servers), ("Service Clients", details.service_clients),
-        ("Action Servers", []), ("Action Clients", []),
+        ("Subscribers", shown(details.subscriptions)), ("Publishers", shown(details.publications)),
+        ("Service Servers", shown(servers)), ("Service Clients", shown(details.service_clients)),
+        ("Action Servers", _actions(servers)), ("Action Clients", _actions(details.service_clients)),
     )  # fmt: skip
     if as_json:
         print_json({"name": details.name, **{title.lower().replace(" ", "_"): [

@@ -1,0 +1,323 @@
+# ruff: noqa: E501  (expected ros2cli lines are kept whole)
+"""ros2cli's own topic and node test cases, run against rostool and real rclpy peers (Jazzy, Kilted).
+
+The command lines and expected output lines are those of ros2cli's tests (ros2topic/test/test_cli.py,
+ros2topic/test/test_echo_pub.py, ros2node/test/test_cli.py), taken as facts; the graph is rebuilt from
+tests/rclpy_peer.py roles: a talker of 'Hello World: N' on /chatter, a listener on /chit_chatter, a hidden
+talker on /_hidden_chatter, repeaters of default test_msgs messages and a TwistStamped /cmd_vel.
+Each test checks several cases and names every case that failed.
+"""
+
+from __future__ import annotations
+
+import re
+import time
+from collections.abc import Callable
+from typing import Any
+
+import pytest
+
+from tests.ros2_peers import RclpyPeer
+from tests.support import rostool, rostool_popen, stop
+
+Start = Callable[..., RclpyPeer]
+
+REPEATS = (
+    "test_msgs/msg/Arrays=/arrays",
+    "test_msgs/msg/Defaults=/defaults",
+    "test_msgs/msg/BoundedSequences=/bounded_sequences",
+    "test_msgs/msg/UnboundedSequences=/unbounded_sequences",
+)
+TOPICS = [
+    "/arrays", "/bounded_sequences", "/chatter", "/chit_chatter", "/cmd_vel", "/defaults",
+    "/parameter_events", "/rosout", "/unbounded_sequences",
+]  # fmt: skip
+
+
+class Cases:
+    """Collects every case's outcome so one failure does not hide the others."""
+
+    def __init__(self) -> None:
+        self.failed: list[str] = []
+        self.passed: list[str] = []
+
+    def check(self, case: str, ok: bool, detail: Any = "") -> None:
+        (self.passed if ok else self.failed).append(case if ok else f"{case}: {str(detail)[-600:]}")
+
+    def done(self) -> None:
+        print(f"ros2cli cases passed: {len(self.passed)}, failed: {len(self.failed)}")
+        assert not self.failed, "\n".join(self.failed)
+
+
+def ros2(env: dict[str, str], *args: str, timeout: float = 30) -> Any:
+    return rostool(["--ros2", *args], env, timeout=timeout)
+
+
+def first_doc(out: str) -> list[str]:
+    lines = out.splitlines()
+    return lines[: lines.index("---") + 1] if "---" in lines else lines
+
+
+@pytest.fixture
+def fixture_graph(graph_env: dict[str, str], start_peer: Start) -> dict[str, RclpyPeer]:
+    peers = {
+        "talker": start_peer("--name", "talker", "--hello", "/chatter"),
+        "listener": start_peer("--name", "listener", "--listen", "/chit_chatter"),
+        "hidden": start_peer("--name", "_hidden_talker", "--hello", "/_hidden_chatter"),
+        "repeater": start_peer(
+            "--name", "repeater", *[a for r in REPEATS for a in ("--repeat", r)], "--cmd-vel", "/cmd_vel"
+        ),
+    }
+    time.sleep(1.0)
+    return peers
+
+
+def test_topic_list_info_type_find(graph_env: dict[str, str], fixture_graph: dict[str, RclpyPeer]) -> None:
+    env, c = graph_env, Cases()
+    out = ros2(env, "topic", "list").stdout
+    c.check("test_list_topics", out.splitlines() == TOPICS, out)
+    for flags, case in ((["--include-hidden-topics"], "test_list_all_topics"), (["-a"], "test_list_a_alias"),
+                        (["--all"], "test_list_all_alias")):  # fmt: skip
+        out = ros2(env, "topic", "list", *flags).stdout
+        c.check(case, out.splitlines() == sorted([*TOPICS, "/_hidden_chatter"]), out)
+    out = ros2(env, "topic", "list", "-t").stdout.splitlines()
+    expected = ["/arrays [test_msgs/msg/Arrays]", "/chatter [std_msgs/msg/String]",
+                "/cmd_vel [geometry_msgs/msg/TwistStamped]", "/rosout [rcl_interfaces/msg/Log]"]  # fmt: skip
+    c.check("test_list_with_types", all(e in out for e in expected) and len(out) == len(TOPICS), out)
+    out = ros2(env, "topic", "list", "-v").stdout.splitlines()
+    c.check("test_list_with_verbose", out[0] == "Published topics:" and
+            " * /arrays [test_msgs/msg/Arrays] 1 publisher" in out and "Subscribed topics:" in out and
+            " * /chit_chatter [std_msgs/msg/String] 1 subscriber" in out and out[-1] == "", out)  # fmt: skip
+    out = ros2(env, "topic", "list", "-c").stdout
+    c.check("test_list_count", out == f"{len(TOPICS)}\n", out)
+    out = ros2(env, "topic", "info", "/chatter").stdout
+    c.check("test_topic_endpoint_info", out == "Type: std_msgs/msg/String\nPublisher count: 1\n"
+            "Subscription count: 0\n", out)  # fmt: skip
+    lines = ros2(env, "topic", "info", "-v", "/chatter").stdout.splitlines()
+    c.check("test_topic_endpoint_info_verbose", lines[:4] == ["Type: std_msgs/msg/String", "", "Publisher count: 1", ""]
+            and re.fullmatch(r"Node name: \w+", lines[4]) is not None and "Node namespace: /" in lines
+            and "Topic type hash: RIHS01_df668c740482bbd48fb39d76a70dfd4bd59db1288021743503259e948f6b1a18" in lines
+            and "  Lifespan: Infinite" in lines and "  Liveliness lease duration: Infinite" in lines
+            and lines[-2:] == ["Subscription count: 0", ""], lines)  # fmt: skip
+    unknown = ros2(env, "topic", "info", "/unknown_topic")
+    c.check("test_info_on_unknown_topic", "Unknown topic '/unknown_topic'" in unknown.stderr
+            and unknown.returncode != 0, unknown)  # fmt: skip
+    out = ros2(env, "topic", "type", "/chatter").stdout
+    c.check("test_topic_type", out == "std_msgs/msg/String\n", out)
+    hidden = ros2(env, "topic", "type", "/_hidden_chatter")
+    c.check("test_hidden_topic_type", hidden.returncode == 1 and hidden.stdout == "", hidden)
+    out = ros2(env, "topic", "find", "rcl_interfaces/msg/Log").stdout
+    c.check("test_find_topic_type", out == "/rosout\n", out)
+    none = ros2(env, "topic", "find", "rcl_interfaces/msg/NotAMessageTypeName")
+    c.check("test_find_not_a_topic_typename", none.returncode == 0 and none.stdout == "", none)
+    for flag, case in (("-a", "test_find_a_alias"), ("--all", "test_find_all_alias")):
+        out = ros2(env, "topic", "find", "std_msgs/msg/String", flag).stdout.split()
+        c.check(case, "/_hidden_chatter" in out and "/chatter" in out, out)
+    c.done()
+
+
+def test_topic_echo_forms(graph_env: dict[str, str], fixture_graph: dict[str, RclpyPeer]) -> None:
+    env, c = graph_env, Cases()
+
+    def echo(*args: str) -> Any:
+        return ros2(env, "topic", "echo", "--once", *args, timeout=20)
+
+    out = echo("/chatter").stdout.splitlines()
+    c.check("test_topic_echo", len(out) == 2 and re.fullmatch(r"data: 'Hello World: \d+'", out[0]) is not None
+            and out[1] == "---", out)  # fmt: skip
+    out = echo("--no-str", "/chatter").stdout.splitlines()
+    c.check(
+        "test_no_str_topic_echo", re.fullmatch(r"data: '<string length: <\d+>>'", out[0]) is not None, out
+    )
+    out = echo("--csv", "/defaults").stdout
+    c.check("test_csv_topic_echo", out == "True,b'2',100,1.125,1.125,-50,200,-1000,2000,-30000,60000,-40000000,"
+            "50000000\n", out)  # fmt: skip
+    out = first_doc(echo("--no-arr", "/arrays").stdout)
+    c.check("test_no_arr_topic_echo_on_array_message", "bool_values: '<array type: boolean[3]>'" in out
+            and "byte_values: '<array type: octet[3]>'" in out and "float32_values: '<array type: float[3]>'" in out
+            and "basic_types_values: '<array type: test_msgs/msg/BasicTypes[3]>'" in out
+            and "string_values_default: '<array type: string[3]>'" in out and out[-2:] == ["alignment_check: 0", "---"],
+            out)  # fmt: skip
+    out = first_doc(echo("--no-arr", "/unbounded_sequences").stdout)
+    c.check("test_no_arr_topic_echo_on_seq_message", "bool_values: '<sequence type: boolean, length: 0>'" in out
+            and "char_values: '<sequence type: uint8, length: 0>'" in out
+            and "defaults_values: '<sequence type: test_msgs/msg/Defaults, length: 0>'" in out
+            and "string_values_default: '<sequence type: string, length: 3>'" in out and len(out) == 33, out)  # fmt: skip
+    out = first_doc(echo("--no-arr", "/bounded_sequences").stdout)
+    c.check("test_no_arr_topic_echo_on_bounded_seq_message",
+            "bool_values: '<sequence type: boolean[3], length: 0>'" in out
+            and "float64_values_default: '<sequence type: double[3], length: 3>'" in out
+            and "constants_values: '<sequence type: test_msgs/msg/Constants[3], length: 0>'" in out, out)  # fmt: skip
+    out = echo("--truncate-length", "5", "/chatter").stdout.splitlines()
+    c.check("test_truncate_length_topic_echo", out == ["data: Hello...", "---"], out)
+    for case, args, expected in (
+        ("test_topic_echo_field", ["/arrays", "--field", "alignment_check"], ["0", "---"]),
+        ("test_topic_echo_multi_fields", ["/defaults", "--field", "int8_value", "--field", "uint8_value"],
+         ["-50", "200", "---"]),
+        ("test_topic_echo_field_nested", ["/cmd_vel", "--field", "twist.angular"], ["x: 0.0", "y: 0.0", "z: 0.0", "---"]),
+        ("test_topic_echo_field_array", ["/arrays", "--field", "float32_values_default.[2]"], ["-1.125", "---"]),
+        ("test_topic_echo_multi_fields_nested", ["/cmd_vel", "--field", "twist.linear.x", "--field", "twist.linear.y"],
+         ["1.0", "0.0", "---"]),
+        ("test_topic_echo_multi_fields_array", ["/arrays", "--field", "float32_values_default.[2]", "--field",
+         "string_values_default.[1]"], ["-1.125", "max value", "---"]),
+    ):  # fmt: skip
+        out = echo(*args).stdout.splitlines()
+        c.check(case, out == expected, out)
+    for case, args, expected in (
+        ("test_topic_echo_field_not_a_member", ["--field", "not_member"],
+         "Invalid field 'not_member': 'Arrays' object has no attribute 'not_member'"),
+        ("test_topic_echo_multi_fields_not_a_member", ["--field", "alignment_check", "--field", "not_member"],
+         "Invalid field 'not_member': 'Arrays' object has no attribute 'not_member'"),
+        ("test_topic_echo_field_invalid", ["--field", "."], "Invalid field value '.'"),
+        ("test_topic_echo_multi_fields_invalid", ["--field", "alignment_check", "--field", "."],
+         "Invalid field value '.'"),
+    ):  # fmt: skip
+        got = echo("/arrays", *args)
+        c.check(case, expected in got.stderr and got.returncode != 0, got)
+    none = ros2(env, "topic", "echo", "/this_topic_has_no_pub")
+    c.check("test_topic_echo_no_publisher", none.returncode != 0
+            and "Could not determine the type for the passed topic" in none.stderr, none)  # fmt: skip
+    raw = ros2(env, "topic", "echo", "--raw", "--once", "/chatter", "std_msgs/msg/String").stdout.splitlines()
+    c.check("test_echo_raw", len(raw) == 2 and raw[0].startswith("b'\\x00\\x01\\x00\\x00") and "Hello World" in raw[0]
+            and raw[1] == "---", raw)  # fmt: skip
+    for case, extra in (("test_echo_basic", []), ("test_echo_basic[compatible_qos]",
+                        ["--qos-reliability", "best_effort", "--qos-durability", "volatile"]),
+                        ("test_echo_basic[message_lost]", ["--lost-messages"])):  # fmt: skip
+        out = ros2(
+            env,
+            "topic",
+            "echo",
+            *extra,
+            "--once",
+            "/chit_chatter_echo_source",
+            "std_msgs/String",
+            "--timeout",
+            "0.1",
+        )  # nothing publishes there: TYPE lets echo wait instead of failing
+        c.check(f"{case} (no publisher with TYPE waits)", "Could not determine" not in out.stderr, out)
+        out = ros2(env, "topic", "echo", *extra, "--once", "/chatter", "std_msgs/String").stdout.splitlines()
+        c.check(case, out[0].startswith("data: 'Hello World: "), out)
+    c.done()
+
+
+def test_topic_pub_forms(graph_env: dict[str, str], fixture_graph: dict[str, RclpyPeer]) -> None:
+    env, c, listener = graph_env, Cases(), fixture_graph["listener"]
+    qos = ["--qos-durability", "transient_local", "--qos-reliability", "reliable"]
+    proc = rostool_popen(["--ros2", "topic", "pub", "--keep-alive", "3", *qos, "/chit_chatter", "std_msgs/msg/String",
+                          "{data: foo}"], env)  # fmt: skip
+    try:
+        heard = [listener.wait_for("heard", lambda e: e["data"] == "foo", timeout=15) for _ in range(1)]
+        time.sleep(2.5)
+    finally:
+        out, _err = stop(proc)
+    lines = out.splitlines()
+    c.check("test_topic_pub", lines[:3] == ["publisher: beginning loop", "publishing #1: std_msgs.msg.String(data='foo')",
+            ""] and heard and len([e for e in listener.of("heard") if e["data"] == "foo"]) >= 2, out)  # fmt: skip
+    once = ros2(env, "topic", "pub", "--once", "--keep-alive", "3", *qos, "/chit_chatter", "std_msgs/msg/String",
+                "{data: bar}")  # fmt: skip
+    c.check("test_topic_pub_once", once.returncode == 0 and once.stdout.splitlines()[:3] == [
+        "publisher: beginning loop", "publishing #1: std_msgs.msg.String(data='bar')", ""]
+        and listener.wait_for("heard", lambda e: e["data"] == "bar") is not None, once)  # fmt: skip
+    proc = rostool_popen(["--ros2", "topic", "pub", "-p", "2", "--keep-alive", "3", *qos, "/chit_chatter",
+                          "std_msgs/msg/String", "{data: fizz}"], env)  # fmt: skip
+    time.sleep(6.0)
+    out, _err = stop(proc)
+    c.check("test_topic_pub_print_every_two", out.splitlines()[:5] == [
+        "publisher: beginning loop", "publishing #2: std_msgs.msg.String(data='fizz')", "",
+        "publishing #4: std_msgs.msg.String(data='fizz')", ""], out)  # fmt: skip
+    times = ros2(
+        env,
+        "topic",
+        "pub",
+        "-t",
+        "5",
+        "-m",
+        "0",
+        "/clitest/topic/pub_times",
+        "std_msgs/String",
+        "data: hello",
+    )
+    expected = ["publisher: beginning loop"]
+    for n in range(1, 6):
+        expected += [f"publishing #{n}: std_msgs.msg.String(data='hello')", ""]
+    c.check("test_pub_times", times.returncode == 0 and times.stdout.splitlines() == expected, times)
+    started = time.monotonic()
+    two = ros2(env, "topic", "pub", "--once", "-w", "1", "-m", "10", "/chit_chatter", "std_msgs/msg/String",
+               "{data: matched}")  # fmt: skip
+    c.check("test_topic_pub_once_matching_listener (-w)", two.returncode == 0 and time.monotonic() - started < 10
+            and listener.wait_for("heard", lambda e: e["data"] == "matched") is not None, two)  # fmt: skip
+    stamped = ros2(
+        env, "topic", "pub", "-1", "/stamped_auto", "geometry_msgs/msg/PointStamped", "{header: auto}"
+    )
+    c.check(
+        "header: auto",
+        stamped.returncode == 0 and "sec=0," not in stamped.stdout.split("stamp=")[1][:12],
+        stamped,
+    )
+    c.done()
+
+
+def test_topic_rates(graph_env: dict[str, str], fixture_graph: dict[str, RclpyPeer]) -> None:
+    env, c = graph_env, Cases()
+    out = ros2(env, "topic", "delay", "/cmd_vel", "--duration", "4.5").stdout.splitlines()
+    m = re.fullmatch(r"average delay: (\d+\.\d{3})", out[0]) if out else None
+    c.check(
+        "test_topic_delay",
+        m is not None
+        and float(m.group(1)) < 0.05
+        and re.fullmatch(r"\s*min: \d+.\d{3}s max: \d+.\d{3}s std dev: \d+.\d{5}s window: \d+", out[1])
+        is not None,
+        out,
+    )
+    out = ros2(env, "topic", "hz", "/chatter", "--duration", "4.5").stdout.splitlines()
+    m = re.fullmatch(r"average rate: (\d+\.\d{3})", out[0]) if out else None
+    c.check("test_topic_hz", m is not None and abs(float(m.group(1)) - 1.0) < 0.02, out)
+    out = ros2(env, "topic", "hz", "/chatter", "/_hidden_chatter", "--duration", "4.5").stdout.splitlines()
+    row = re.compile(r"/chatter\s+(\d+.\d{3})\s+\d+.\d{3}\s+\d+.\d{3}\s+\d+.\d{5}\s+\d+\s+")
+    c.check("test_multiple_topics_hz", out[:2] == ["Subscribed to [/chatter]", "Subscribed to [/_hidden_chatter]"]
+            and re.match(r"\s+topic\s+rate\s+min_delta\s+max_delta\s+std_dev\s+window", out[2]) is not None
+            and any(row.match(line) for line in out), out)  # fmt: skip
+    out = ros2(env, "topic", "bw", "/defaults", "--duration", "4.5").stdout.splitlines()
+    c.check("test_topic_bw", out[0] == "Subscribed to [/defaults]" and re.fullmatch(r"\d{2,3} B/s from \d+ messages",
+            out[1]) is not None and re.fullmatch(r"\s*Message size mean: \d{2} B min: \d{2} B max: \d{2} B", out[2])
+            is not None, out)  # fmt: skip
+    for args in (["hz", "/chatter", "--spin-time", "1", "-s", "--no-daemon", "--duration", "1.5"],
+                 ["bw", "/chatter", "--spin-time", "1", "-s", "--duration", "1.5"],
+                 ["list", "--no-daemon", "--spin-time", "1", "-s"]):  # fmt: skip
+        got = ros2(env, "topic", *args)
+        c.check(f"accepted and ignored: topic {' '.join(args)}", got.returncode == 0, got)
+    c.done()
+
+
+def test_node_list_and_info(graph_env: dict[str, str], fixture_graph: dict[str, RclpyPeer]) -> None:
+    env, c = graph_env, Cases()
+    visible = ["/listener", "/repeater", "/talker"]
+    out = ros2(env, "node", "list").stdout.splitlines()
+    c.check("test_list_nodes", out == visible, out)
+    out = ros2(env, "node", "list", "-a").stdout.splitlines()
+    c.check("test_list_all_nodes", out == ["/_hidden_talker", *visible], out)
+    out = ros2(env, "node", "list", "-c").stdout
+    c.check("test_list_node_count", out == "3\n", out)
+    out = ros2(env, "node", "list", "-c", "-a").stdout
+    c.check("test_list_all_nodes_count", out == "4\n", out)
+    lines = ros2(env, "node", "info", "/repeater").stdout.splitlines()
+    c.check(
+        "test_info_node",
+        lines[:2] == ["/repeater", "  Subscribers:"]
+        and "  Publishers:" in lines
+        and "    /arrays: test_msgs/msg/Arrays" in lines
+        and "    /rosout: rcl_interfaces/msg/Log" in lines
+        and len(
+            [x for x in lines if re.match(r"\s*/repeater/.*parameter.*: rcl_interfaces/srv/.*Parameter.*", x)]
+        )
+        == 6
+        and lines[-2:] == ["  Action Servers:", "  Action Clients:"],
+        lines,
+    )
+    hidden = ros2(env, "node", "info", "/_hidden_talker")
+    c.check("test_info_hidden_node_no_hidden_flag", hidden.returncode == 1
+            and "Unable to find node '/_hidden_talker'" in hidden.stderr, hidden)  # fmt: skip
+    lines = ros2(env, "node", "info", "/_hidden_talker", "--include-hidden").stdout.splitlines()
+    c.check("test_info_hidden_node_hidden_flag", lines[0] == "/_hidden_talker"
+            and "    /_hidden_chatter: std_msgs/msg/String" in lines, lines)  # fmt: skip
+    c.done()
