@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from rostool.bag.open import BagInput, detect, guard, load_metadata
+from rostool.bag.open import BagInput, describe, detect, guard, load_metadata
 from rostool.errors import RostoolError
 
 NS = 1_000_000_000
@@ -357,7 +357,7 @@ def _db3_info(bag: BagInput) -> BagInfo:
         try:
             db = sqlite3.connect(f"file:{path}?mode=ro&immutable=1", uri=True)
         except sqlite3.Error as err:
-            raise RostoolError(f"{path}: cannot open database: {err}") from err
+            raise RostoolError(f"{path}: cannot open database: {describe(err)}") from err
         db.text_factory = lambda raw: raw.decode("utf-8", errors="replace")  # damaged text stays readable
         try:
             tables = {row[0] for row in db.execute("SELECT name FROM sqlite_master WHERE type='table'")}
@@ -370,10 +370,12 @@ def _db3_info(bag: BagInput) -> BagInfo:
             hash_column = "type_description_hash" if "type_description_hash" in columns else "''"
             names = {}
             for tid, name, typ, digest in db.execute(f"SELECT id, name, type, {hash_column} FROM topics"):
+                if not isinstance(name, str) or not isinstance(typ, str):
+                    raise RostoolError(f"{path}: damaged database: topic {tid} has no name or no type")
                 names[tid] = name
                 topic_types.setdefault(name, typ)
                 if not types.get(typ):
-                    types[typ] = digest or ""
+                    types[typ] = digest if isinstance(digest, str) else ""
             for tid, count, lo, hi in db.execute(
                 "SELECT topic_id, COUNT(*), MIN(timestamp), MAX(timestamp) FROM messages GROUP BY topic_id"
             ):
@@ -383,7 +385,7 @@ def _db3_info(bag: BagInput) -> BagInfo:
                 start = lo if start is None else min(start, lo)
                 end = hi if end is None else max(end, hi)
         except sqlite3.Error as err:
-            raise RostoolError(f"{path}: cannot read database: {err}") from err
+            raise RostoolError(f"{path}: cannot read database: {describe(err)}") from err
         finally:
             db.close()
     return BagInfo(

@@ -73,12 +73,13 @@ class BagReader(AbstractContextManager["BagReader"]):
         try:
             for bag in self.inputs:
                 self._open(bag)
-            self.resolver = TypeResolver(
-                (conn.msgtype for conn in self.connections),
-                self._stored_definitions(),
-                self.ros_version,
-                distro,
-            )
+            with guard(self.paths[0] if len(self.paths) == 1 else Path(", ".join(map(str, self.paths)))):
+                self.resolver = TypeResolver(
+                    (conn.msgtype for conn in self.connections),
+                    self._stored_definitions(),
+                    self.ros_version,
+                    distro,
+                )
         except BaseException:
             self._stack.close()
             raise
@@ -160,6 +161,8 @@ class BagReader(AbstractContextManager["BagReader"]):
 
     def _register(self, path: Path, conns: Sequence[Connection], counts: bool) -> None:
         for conn in conns:
+            if not isinstance(conn.topic, str) or not isinstance(conn.msgtype, str) or not conn.msgtype:
+                raise RostoolError(f"{path}: cannot read bag: damaged file: a topic without name or type")
             key = self._key(conn)
             existing = next((c for c in self.connections if self._key(c) == key), None)
             topic = self.topics.get(conn.topic)
