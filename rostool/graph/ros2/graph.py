@@ -43,7 +43,7 @@ if TYPE_CHECKING:
 SETTLE_MAX_SECONDS = 3.0  # listing verbs: how long an empty graph is given before "no participants"
 NODES_MAX_SECONDS = 4.5  # node verbs: Fast DDS sends ros_discovery_info on its 3 s heartbeat
 TOPIC_WAIT_SECONDS = 1.5
-NODE_WAIT_SECONDS = 1.0  # unknown types: how long to wait for the publishers' nodes to be announced
+NODE_WAIT_SECONDS = NODES_MAX_SECONDS  # unknown types: how long to wait for the publishers' nodes
 READER_CACHE_DEPTH = 1000  # echo/hz/pub: how long to look for a topic before warning it is not there yet
 _ANY_SAMPLE = 0x7F  # SampleState.Any | ViewState.Any | InstanceState.Any (DDS mask bits)
 
