@@ -488,7 +488,8 @@ def test_prefix_and_skip_empty_into_ros2(tmp_path: Path) -> None:
 
     env = ros2_env()
     bag = gap_bag(tmp_path)
-    echo = rostool_popen(["topic", "echo", "/pre/numbers", "-n", "10"], env)
+    # ros2 topic echo's form: with no publisher yet, the TYPE makes it subscribe and wait
+    echo = rostool_popen(["topic", "echo", "/pre/numbers", "std_msgs/msg/Int32", "-n", "10"], env)
     try:
         args = ["--wait-for-subscribers", "-p", "/pre", "--skip-empty", "1", str(bag)]
         began = time.monotonic()
