@@ -32,6 +32,7 @@ GRAPH_QUIET_SECONDS = 0.5
 # nothing but ourselves seen: how long before "no nodes found". A Fast DDS participant may answer a new one
 # only with its next periodic announcement (every 3 s), so discovery takes from 0 to about 3 s
 SETTLE_MAX_SECONDS = 4.5
+TOPIC_WAIT_SECONDS = 1.5  # topic_type: how long a topic without publishers is given to get one
 UNKNOWN_NODE = "_NODE_NAME_UNKNOWN_"  # what ros2cli (and the DDS backend) show for endpoints of no node
 
 
@@ -229,7 +230,10 @@ class RclpyGraph(NotYet):
         def published() -> bool:
             return bool(self._endpoints(resolved)[0])
 
+        deadline = time.monotonic() + TOPIC_WAIT_SECONDS
         self.settle(until=published)
+        while not published() and time.monotonic() < deadline:
+            time.sleep(0.05)
         pubs, subs = self._endpoints(resolved)
         return (pubs or subs)[0].topic_type if pubs or subs else None
 

@@ -17,6 +17,7 @@ from rostool.graph.rclpy.select import WAY_OUT
 _PRIMITIVES = {"boolean": "bool", "octet": "byte", "float": "float32", "double": "float64"}
 _SEQUENCE = re.compile(r"sequence<(.+?)(?:, (\d+))?>")
 _ARRAY = re.compile(r"(.+)\[(\d+)\]")
+_BOUNDED_STRING = re.compile(r"(w?string)<(\d+)>")
 
 
 def python_class(store_name: str) -> Any:
@@ -47,7 +48,34 @@ def ensure_known(types: Any, store_name: str) -> None:
     for inner in nested:
         ensure_known(types, inner)
     text = "\n".join(f"{kind} {name}" for name, kind in fields)
-    types.register(get_types_from_msg(text, store_name))
+    try:
+        types.register(get_types_from_msg(text, store_name))
+    except Exception as err:  # a field rosbags' .msg reader does not take (wstring)
+        raise RostoolError(
+            f"type {store_name}: rostool cannot describe the class rclpy imports to rosbags "
+            f"({' '.join(str(err).split())[:120]}); {WAY_OUT} with its .msg sources (--interfaces)"
+        ) from None
+    defaults = default_values(python_class(store_name), fields)
+    if defaults:
+        types.sources.defaults[store_name] = defaults
+
+
+def default_values(cls: Any, fields: list[tuple[str, str]]) -> dict[str, Any]:
+    """The .msg defaults of the plain fields, as a new instance of the class holds them (`topic pub` fills
+    missing fields with them, as it does from source files)."""
+    instance = cls()
+    found: dict[str, Any] = {}
+    for name, kind in fields:
+        if "/" in kind:
+            continue
+        value = getattr(instance, name)
+        value = value.tolist() if hasattr(value, "tolist") else value
+        if isinstance(value, (bytes, bytearray)):
+            value = value[0] if len(value) == 1 and "[" not in kind else list(value)
+        elif isinstance(value, (list, tuple)):
+            value = [v[0] if isinstance(v, bytes) and len(v) == 1 else v for v in value]
+        found[name] = value
+    return found
 
 
 def describe(cls: Any) -> tuple[list[tuple[str, str]], list[str]]:
@@ -74,6 +102,9 @@ def _msg_type(idl: str) -> tuple[str, list[str]]:
 
 
 def _base(idl: str) -> tuple[str, list[str]]:
+    bounded = _BOUNDED_STRING.fullmatch(idl)
+    if bounded:  # rosidl's `string<22>` is .msg's `string<=22>`
+        return f"{bounded[1]}<={bounded[2]}", []
     if "/" in idl:
         pkg, _, name = idl.rpartition("/")
         store_name = f"{pkg}/{name}" if pkg.count("/") else f"{pkg}/msg/{name}"
