@@ -64,6 +64,8 @@ def ros2_env(**extra: str) -> dict[str, str]:
     multicast off), no inherited ROS settings."""
     from rostool.graph.ros2.dds import cyclone_config
 
+    if len(_used_domains) >= 100:  # a long run: the earliest tests' graphs are gone, start over
+        _used_domains.clear()
     domain = random.choice([d for d in range(100, 230) if d not in _used_domains])
     _used_domains.add(domain)
     env = {k: v for k, v in os.environ.items() if not k.startswith("ROS") and k != "CYCLONEDDS_URI"}

@@ -234,7 +234,8 @@ def test_hidden_topics_only_when_asked(env: dict[str, str], tmp_path: Path) -> N
         for topic in ("/visible", "/robot/_internal")
     ]
     try:
-        assert wait_until(lambda: len(rostool(["topic", "list"], env).stdout.split()) == 2, timeout=20)
+        listed = ["topic", "list", "--include-hidden-topics"]  # ros2 topic list hides /_name topics
+        assert wait_until(lambda: len(rostool(listed, env).stdout.split()) == 2, timeout=20)
         plain = rostool(["bag", "record", "-a", "-O", str(tmp_path / "plain.mcap"), "--duration", "1.5"], env)
         hidden = rostool(["bag", "record", "-a", "--include-hidden-topics", "-O", str(tmp_path / "all.mcap"),
                           "--duration", "1.5"], env)  # fmt: skip

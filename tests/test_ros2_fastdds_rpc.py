@@ -160,3 +160,13 @@ def test_action_cancel_verb_reaches_the_server(graph_env: dict[str, str], start_
     assert canceled.stdout.split() == ["Canceling", "1", "goal(s)", "of", "/fibonacci:", goal_id]
     peer.wait_for("cancel")
     assert json.loads(out.splitlines()[-1])["status"] == "CANCELED", err
+
+
+def test_action_list_and_info_name_the_real_server(graph_env: dict[str, str], start_peer: Start) -> None:
+    start_peer("--name", "fib", "--action", "/fibonacci")
+    listed = rostool(["action", "list", "-t"], graph_env)
+    assert listed.stdout.splitlines() == ["/fibonacci [test_msgs/action/Fibonacci]"], listed.stderr
+    info = rostool(["action", "info", "/fibonacci"], graph_env).stdout.splitlines()
+    assert info[0] == "Action: /fibonacci"
+    assert info[info.index("Action servers: 1") + 1] == "    /fib"  # the node, once it has named itself
+    assert "Action clients: 0" in info

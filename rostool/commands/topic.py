@@ -382,8 +382,8 @@ def echo(
         render = _echo_renderer(graph, fields, as_json, as_csv, noarr, nostr, truncate_length, full_length,
                                 flow_style, raw)  # fmt: skip
         if graph.topic_type(name) is None:
-            if ros2 and message_type is None:
-                raise RostoolError("Could not determine the type for the passed topic")
+            # ros2 topic echo gives up here ("Could not determine the type"); rostool waits for a
+            # publisher to tell it (or --timeout ends it), as it did since it could learn types
             click.echo(f"WARNING: topic [{name}] does not appear to be published yet", err=True)
         inbox = Inbox(graph, name)
         shown = 0

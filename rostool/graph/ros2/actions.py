@@ -122,10 +122,11 @@ class ActionSummary:
     clients: list[str]
 
 
-def list_actions(graph: Ros2Graph) -> list[ActionSummary]:
-    """Actions with a server (a reader of `ACTION/_action/send_goal` requests), with clients."""
+def list_actions(graph: Ros2Graph, nodes: bool = False) -> list[ActionSummary]:
+    """Actions with a server (a reader of `ACTION/_action/send_goal` requests), with clients (their node
+    names complete only with `nodes`)."""
     found: dict[str, ActionSummary] = {}
-    for name, type_, servers, clients in graph.service_endpoints():
+    for name, type_, servers, clients in graph.service_endpoints(nodes):
         split = split_action_service(name)
         if split is None or split[1] != "send_goal":
             continue

@@ -397,9 +397,10 @@ class Ros2Graph(Ros2Verbs):
             entry[1].append(owners.get(endpoint.guid, UNKNOWN_NODE))
         return [(name, found[name][0], sorted(found[name][1])) for name in sorted(found)]
 
-    def service_endpoints(self) -> list[tuple[str, str, list[str], list[str]]]:
-        """(name, type, server nodes, client nodes) of every service that has a server."""
-        cache = self._settled(require_peers=True)
+    def service_endpoints(self, nodes: bool = False) -> list[tuple[str, str, list[str], list[str]]]:
+        """(name, type, server nodes, client nodes) of every service that has a server; with `nodes`,
+        once every participant has named its nodes."""
+        cache = self._settled(require_peers=True, nodes=nodes)
         owners = self._owners(cache)
         found: dict[str, tuple[str, set[str], set[str]]] = {}
         for endpoint in cache.remote_endpoints():
@@ -422,7 +423,7 @@ class Ros2Graph(Ros2Verbs):
         """ros2 service info's facts: the service's types, its clients and its servers (each with node, type
         hash, the GIDs and QoS of its two DDS endpoints); None when no client or server announces it."""
         resolved = resolve(service)
-        cache = self._settled(require_peers=True)
+        cache = self._settled(require_peers=True, nodes=True)
         owners = self._owners(cache)
         # rmw_cyclonedds_cpp: a client writes requests and reads replies, a server the other way round
         sides: dict[tuple[str, str, str], list[Endpoint]] = {}

@@ -104,7 +104,7 @@ class Ros2Verbs:
     def action_info(self: Ros2Graph, name: str, wait: float) -> dict[str, Any]:
         """ros2 action info's facts: the action's type, servers and clients."""
         action = self.resolve(name)
-        found = next((a for a in self.actions() if a.name == action), None)
+        found = next((a for a in actions.list_actions(self, nodes=True) if a.name == action), None)
         if found is None:
             raise RostoolError(f"unknown action {action}: no server announces it (`rostool action list`)")
         return vars(found)
