@@ -65,6 +65,12 @@ def ignored_ros2_options(*names: str) -> Callable[[Callable[..., Any]], Callable
     return decorate
 
 
+include_hidden_option = click.option(
+    "-a", "--include-hidden-topics", "--all", "include_hidden", is_flag=True,
+    help="ROS 2: also hidden topics (a name part starting with _).",
+)  # fmt: skip
+
+
 @topic.command("list")
 @click.option("-v", "--verbose", is_flag=True, help="Group by publishers/subscribers with types and counts.")
 @click.option("-p", "publishers_only", is_flag=True, help="Only topics that have publishers.")
@@ -77,14 +83,7 @@ def ignored_ros2_options(*names: str) -> Callable[[Callable[..., Any]], Callable
 @click.option("--use-sim-time", is_flag=True, hidden=True)
 @click.option("-t", "--show-types", is_flag=True, help="ROS 2: each topic with its type.")
 @click.option("-c", "--count-topics", is_flag=True, help="Only the number of topics.")
-@click.option(
-    "-a",
-    "--include-hidden-topics",
-    "--all",
-    "include_hidden",
-    is_flag=True,
-    help="ROS 2: also hidden topics (a name part starting with _).",
-)
+@include_hidden_option
 @json_option
 @ignored_ros2_options("no_daemon", "spin_time")
 @click.pass_context
@@ -219,14 +218,7 @@ def _node_uri(graph: Any, node: str) -> str:
 
 @topic.command("type")
 @click.argument("name")
-@click.option(
-    "-a",
-    "--include-hidden-topics",
-    "--all",
-    "include_hidden",
-    is_flag=True,
-    help="ROS 2: hidden topics (a name part starting with _) too.",
-)
+@include_hidden_option
 @ignored_ros2_options("no_daemon", "spin_time", "use_sim_time")
 @click.pass_context
 def type_(ctx: click.Context, name: str, include_hidden: bool) -> None:
@@ -250,14 +242,7 @@ def type_(ctx: click.Context, name: str, include_hidden: bool) -> None:
 @topic.command("find")
 @click.argument("type_name", metavar="TYPE")
 @click.option("-c", "--count-topics", is_flag=True, help="Only the number of topics found.")
-@click.option(
-    "-a",
-    "--include-hidden-topics",
-    "--all",
-    "include_hidden",
-    is_flag=True,
-    help="ROS 2: hidden topics (a name part starting with _) too.",
-)
+@include_hidden_option
 @ignored_ros2_options("no_daemon", "spin_time", "use_sim_time")
 @click.pass_context
 def find(ctx: click.Context, type_name: str, count_topics: bool, include_hidden: bool) -> None:
