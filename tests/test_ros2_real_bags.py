@@ -15,6 +15,7 @@ import pytest
 
 from tests.ros2_peers import RclpyPeer
 from tests.support import TESTDATA, rostool
+from tests.test_ros2_bag_record import foxglove_decoded
 
 Start = Callable[..., RclpyPeer]
 
@@ -45,9 +46,7 @@ def test_record_from_real_publishers(
     assert xs == [float(x) for x in range(int(xs[0]), int(xs[0]) + len(xs))]
     assert {m.header.frame_id for m in recorded["/pose"]} == {"map"}  # type: ignore[attr-defined]
     if suffix == ".mcap":
-        from mcap_ros2.reader import read_ros2_messages
-
-        decoded = [m.ros_msg.data for m in read_ros2_messages(str(out), topics=["/chatter"])]
+        decoded = [m.data for topic, _schema, m in foxglove_decoded(out) if topic == "/chatter"]
         assert decoded == [f"hello {n}" for n in numbers]
 
 
