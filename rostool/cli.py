@@ -6,6 +6,7 @@ never loads the ROS machinery.
 
 from __future__ import annotations
 
+import errno
 import importlib
 import os
 import sys
@@ -59,9 +60,11 @@ class LazyGroup(click.Group):
         spec = COMMANDS.get(cmd_name)
         if spec is None or not _module_exists(spec[0]):
             return None
+        from rostool.commands._common import attach_completion
+
         module = importlib.import_module(spec[0])
         command: click.Command = getattr(module, spec[1])
-        return command
+        return attach_completion(command)
 
     def format_commands(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:
         rows = [(name, COMMANDS[name][2]) for name in self.list_commands(ctx)]
@@ -82,6 +85,14 @@ class LazyGroup(click.Group):
             # A closed pipe (e.g. `| head`) is a normal end; stop quietly.
             _silence_stdout()
             ctx.exit(0)
+        except OSError as err:
+            if err.errno != errno.ENOSPC:
+                raise
+            # Writers close what they wrote on the way out; say what happened in one line.
+            where = f" writing {err.filename}" if err.filename else ""
+            click.echo(f"rostool: the disk is full{where}: free some space (or write elsewhere) and retry",
+                       err=True)  # fmt: skip
+            ctx.exit(1)
         return None
 
 

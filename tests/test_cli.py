@@ -10,6 +10,7 @@ import click
 import pytest
 
 from rostool.cli import COMMANDS, root
+from rostool.commands._common import _load, _spec_exists
 from rostool.graph import select_ros_version
 from tests.support import free_port
 
@@ -36,6 +37,9 @@ def _walk(command: click.Command, path: tuple[str, ...]) -> list[tuple[tuple[str
             sub = command.get_command(ctx, name)
             assert sub is not None
             found += _walk(sub, (*path, name))
+        for name, spec in getattr(command, "ros2_forms", {}).items():
+            if _spec_exists(spec):  # the ROS 2 form of a verb (e.g. bag record): its own --help
+                found += _walk(_load(spec), (*path, name))
     return found
 
 

@@ -58,3 +58,71 @@ interfaces_option = click.option(
     help="Also find .msg/.srv/.action files here: a workspace, a package or one file (repeatable; "
     "env ROSTOOL_INTERFACES). ROS_PACKAGE_PATH and the workspace around the current folder are searched too.",
 )
+
+
+def attach_completion(command: click.Command) -> click.Command:
+    """Give the arguments live-graph and bag completion (rostool.completion), when that module exists."""
+    from importlib.util import find_spec
+
+    if find_spec("rostool.completion") is not None:
+        from rostool.completion import attach
+
+        attach(command)
+    return command
+
+
+class ExtensibleGroup(click.Group):
+    """A command group whose verbs can live in their own modules, imported only when used.
+
+    `extra`: verb -> "module:attribute", listed when the module exists (optional features, e.g. export).
+    `ros2_forms`: verb -> "module:attribute" used instead of the group's own verb when the selected ROS
+    version is 2 (ros2cli's flags where the letters mean something else than in the ROS 1 tool).
+    """
+
+    def __init__(
+        self,
+        *args: Any,
+        extra: dict[str, str] | None = None,
+        ros2_forms: dict[str, str] | None = None,
+        **kwargs: Any,
+    ) -> None:
+        super().__init__(*args, **kwargs)
+        self.extra = extra or {}
+        self.ros2_forms = ros2_forms or {}
+
+    def list_commands(self, ctx: click.Context) -> list[str]:
+        names = set(super().list_commands(ctx))
+        names.update(name for name, spec in self.extra.items() if _spec_exists(spec))
+        return sorted(names)
+
+    def get_command(self, ctx: click.Context, cmd_name: str) -> click.Command | None:
+        spec = self.ros2_forms.get(cmd_name)
+        if spec is not None and _spec_exists(spec) and _selected_version(ctx) == 2:
+            return attach_completion(_load(spec))
+        command = super().get_command(ctx, cmd_name)
+        if command is None:
+            spec = self.extra.get(cmd_name)
+            if spec is None or not _spec_exists(spec):
+                return None
+            command = _load(spec)
+        return attach_completion(command)
+
+
+def _selected_version(ctx: click.Context) -> int:
+    from rostool.graph import select_ros_version
+
+    return select_ros_version(ros_version(ctx))
+
+
+def _spec_exists(spec: str) -> bool:
+    from importlib.util import find_spec
+
+    return find_spec(spec.partition(":")[0]) is not None
+
+
+def _load(spec: str) -> click.Command:
+    import importlib
+
+    module, _, attribute = spec.partition(":")
+    command: click.Command = getattr(importlib.import_module(module), attribute)
+    return command

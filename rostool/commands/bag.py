@@ -13,7 +13,7 @@ from typing import Any
 import click
 
 from rostool.bag.typestores import DEFAULT_DISTRO, DISTROS
-from rostool.commands._common import interfaces_option
+from rostool.commands._common import ExtensibleGroup, interfaces_option
 from rostool.commands._qos import qos_options
 from rostool.errors import RostoolError
 from rostool.graph.qos import QosRequest
@@ -22,7 +22,19 @@ CONTEXT = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
 TIME_HELP = "seconds since the epoch, or +S for S seconds after the bag's first message"
 
 
-@click.group(context_settings=CONTEXT)
+@click.group(
+    cls=ExtensibleGroup,
+    context_settings=CONTEXT,
+    extra={
+        "export": "rostool.commands.bag_export:export",
+        "plot": "rostool.commands.bag_plot:plot",
+        "graph": "rostool.commands.bag_graph:graph",
+    },
+    ros2_forms={
+        "record": "rostool.commands.bag_ros2:record",
+        "play": "rostool.commands.bag_ros2:play",
+    },
+)
 def bag() -> None:
     """Inspect, convert and repair bags: ROS 1 .bag, rosbag2 directories, .mcap and .db3 files.
 

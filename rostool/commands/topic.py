@@ -11,13 +11,20 @@ from typing import Any
 
 import click
 
-from rostool.commands._common import interfaces_option, json_option, live_graph, print_json, ros_version
+from rostool.commands._common import (
+    ExtensibleGroup,
+    interfaces_option,
+    json_option,
+    live_graph,
+    print_json,
+    ros_version,
+)
 from rostool.commands._qos import qos_options
 from rostool.errors import RostoolError
 from rostool.graph.qos import QosRequest
 
 
-@click.group()
+@click.group(cls=ExtensibleGroup, extra={"plot": "rostool.commands.topic_plot:plot"})
 def topic() -> None:
     """Inspect and use topics (like rostopic, or ros2 topic).
 
