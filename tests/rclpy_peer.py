@@ -45,6 +45,21 @@ EVERY_TYPE = {
     "gains": [0.1, 0.2],
     "names": ["a", "b"],
 }
+# --ros2cli-params: the parameters of ros2cli's ros2param fixtures (test/param_node.py and
+# test/fixtures/parameter_node.py); None is declared with dynamic typing (a "not set" parameter)
+ROS2CLI_PARAMS = {
+    "param_node": {
+        "bool_param": True, "int_param": 42, "double_param": 1.23, "str_param": "Hello World",
+        "int_array": [1, 2, 3], "double_array": [1.0, 2.0, 3.0], "bool_array": [True, False, True],
+        "str_array": ["Hello", "World"], "byte_array": [b"p", b"v"], "parameter_with_no_value": None,
+    },
+    "parameter_node": {
+        "bool_param": True, "int_param": 42, "double_param": 1.23, "str_param": "Hello World",
+        "bool_array_param": [False, False, True], "int_array_param": [1, 2, 3],
+        "str_array_param": ["foo", "bar", "baz"], "double_array_param": [3.125, 6.25, 12.5],
+        "foo.str_param": "foo", "foo.bar.str_param": "foobar",
+    },
+}  # fmt: skip
 
 
 def emit(event: str, **fields: object) -> None:
@@ -107,6 +122,11 @@ class Peer(Node):
             for name, value in EVERY_TYPE.items():
                 self.declare_parameter(name, value)
             self.add_post_set_parameters_callback(self.on_params)
+        if args.ros2cli_params:
+            from rcl_interfaces.msg import ParameterDescriptor
+
+            for name, value in ROS2CLI_PARAMS[args.ros2cli_params].items():
+                self.declare_parameter(name, value, ParameterDescriptor(dynamic_typing=value is None))
         if args.service:
             from std_srvs.srv import SetBool
 
@@ -264,12 +284,22 @@ def main() -> None:
     parser.add_argument("--raw-count", help="count std_msgs/String here (raw=True, as ros2 topic hz)")
     parser.add_argument("--listen", action="append", default=[])
     parser.add_argument("--params", action="store_true", help="declare a parameter of every type")
+    parser.add_argument(
+        "--ros2cli-params",
+        choices=sorted(ROS2CLI_PARAMS),
+        help="declare the parameters of that ros2cli ros2param test fixture",
+    )
     parser.add_argument("--service", help="serve std_srvs/srv/SetBool here")
     parser.add_argument("--action", help="serve test_msgs/action/Fibonacci here")
     parser.add_argument("--step", type=float, default=0.1, help="seconds between Fibonacci feedbacks")
     parser.add_argument("--watch", action="store_true", help="report the graph every 0.5 s")
-    parser.add_argument("--repeat", action="append", default=[], metavar="TYPE=TOPIC",
-                        help="publish a default pkg/msg/Type message on TOPIC every second")
+    parser.add_argument(
+        "--repeat",
+        action="append",
+        default=[],
+        metavar="TYPE=TOPIC",
+        help="publish a default pkg/msg/Type message on TOPIC every second",
+    )
     parser.add_argument("--hello", help="publish std_msgs/String 'Hello World: N' here at 1 Hz")
     parser.add_argument("--cmd-vel", help="publish geometry_msgs/TwistStamped (stamp now, x 1) at 1 Hz")
     args = parser.parse_args()
