@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import shutil
 import struct
 from pathlib import Path
 
@@ -149,3 +150,39 @@ def test_reindex_refuses_what_it_cannot_do(tmp_path: Path) -> None:
     result = rostool(["bag", "reindex", str(bag)], env())
     assert result.returncode == 1 and "a.orig.bag exists" in result.stderr
     assert struct.unpack("<I", bag.read_bytes()[13:17])[0] > 0  # untouched
+
+
+def _rosbags_count(path: Path) -> tuple[int, list[str]]:
+    """Messages and topics of a rosbag2 directory, read by rosbags' own reader (metadata.yaml first)."""
+    from rosbags.highlevel import AnyReader
+
+    with AnyReader([path]) as reader:
+        return sum(1 for _ in reader.messages()), sorted(c.topic for c in reader.connections)
+
+
+def test_rosbag2_directory_cut_short_gets_metadata_back(tmp_path: Path) -> None:
+    """A killed recorder's NAME.db3.active/ or NAME.mcap.active/: storage without metadata.yaml (and an
+    .mcap without its summary); `bag reindex DIR` writes metadata.yaml as `ros2 bag reindex` does."""
+    for name in ("talker_sqlite3", "talker_mcap"):
+        whole = tmp_path / name
+        shutil.copytree(shared(f"ros2/{name}"), whole)
+        whole.chmod(0o755)
+        with BagReader([whole]) as reader:  # rosbags reads no message of these two (QoS mismatch)
+            expected = reader.message_count, sorted(reader.topics)
+        cut = tmp_path / f"{name}.active"
+        cut.mkdir()
+        (storage,) = [p for p in whole.iterdir() if p.suffix in (".db3", ".mcap")]
+        data = storage.read_bytes()
+        if storage.suffix == ".mcap":  # no footer: cut somewhere in the data section
+            data = data[: len(data) * 6 // 10]
+        (cut / storage.name).write_bytes(data)
+        out = _reindex(cut)
+        assert "messages indexed" in out and (tmp_path / f"{name}.active.orig" / storage.name).is_file()
+        messages, topics = _rosbags_count(cut)
+        assert topics == expected[1]
+        if storage.suffix == ".db3":
+            assert messages == expected[0]
+        else:
+            assert 0 < messages <= expected[0]
+        again = rostool(["bag", "reindex", str(cut)], env())
+        assert again.returncode == 1 and "this one is complete" in again.stderr

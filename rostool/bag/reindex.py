@@ -6,6 +6,10 @@ records, the connection and chunk-info records and a bag header pointing at them
 `NAME.orig.bag`, as `rosbag reindex` does.
 mcap: copy every readable record into a new file whose writer adds the summary and indexes (`NAME.orig.mcap`
 keeps the original).
+rosbag2 directory (also `NAME.mcap.active/` or `NAME.db3.active/` left by a killed `bag record`), as
+`ros2 bag reindex` does: repair each cut-short .mcap as above, roll back a .db3's unfinished transaction
+(rosbags opens sqlite files immutable, ignoring a hot journal), then write metadata.yaml from what the
+storage files hold. The original directory's files are kept in `DIR.orig/` (hard links where unchanged).
 """
 
 from __future__ import annotations
@@ -37,6 +41,10 @@ def backup_path(path: Path) -> Path:
 
 
 def reindex(given: str | Path) -> ReindexResult:
+    if Path(given).is_dir() or Path(given).name == "metadata.yaml":
+        from rostool.bag.reindex_rosbag2 import reindex_rosbag2
+
+        return reindex_rosbag2(Path(given))
     bag = detect(given)
     if bag.kind not in ("bag", "mcap") or len(bag.files) != 1 or bag.path.is_dir():
         raise RostoolError(f"{bag.path}: reindex works on a ROS 1 .bag or a single .mcap file")
@@ -49,7 +57,7 @@ def reindex(given: str | Path) -> ReindexResult:
         if bag.kind == "bag":
             messages, chunks, partial = _reindex_ros1(path, tmp)
         else:
-            messages, chunks, partial = _reindex_mcap(path, tmp)
+            messages, chunks, partial = reindex_mcap(path, tmp)
         os.replace(path, backup)
         os.replace(tmp, path)
     except BaseException:
@@ -261,7 +269,19 @@ def _write_ros1(
 
 
 # -- mcap ----------------------------------------------------------------------------------------
-def _reindex_mcap(path: Path, tmp: Path) -> tuple[int, int, bool]:
+def mcap_complete(path: Path) -> bool:
+    """The file ends with the footer and closing magic (its writer finished it)."""
+    from rostool.bag.open import MCAP_MAGIC
+
+    size = path.stat().st_size
+    if size < 2 * len(MCAP_MAGIC) + 29:
+        return False
+    with path.open("rb") as handle:
+        handle.seek(size - len(MCAP_MAGIC))
+        return handle.read() == MCAP_MAGIC
+
+
+def reindex_mcap(path: Path, tmp: Path) -> tuple[int, int, bool]:
     from mcap.exceptions import McapError
     from mcap.records import Attachment, Channel, Header, Message, Metadata, Schema
     from mcap.stream_reader import StreamReader
