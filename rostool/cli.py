@@ -28,6 +28,7 @@ COMMANDS: dict[str, tuple[str, str, str]] = {
     "srv": ("rostool.commands.srv", "srv", "Show service types and their md5sums."),
     "action": ("rostool.commands.action", "action", "List actions, send goals, follow feedback, cancel."),
     "bag": ("rostool.commands.bag", "bag", "Inspect, play, record and convert bags (.bag, .db3, .mcap)."),
+    "graph": ("rostool.commands.graph", "graph", "Show the node/topic graph as text, DOT, JSON, SVG or PNG."),
     "doctor": (
         "rostool.commands.doctor",
         "doctor",

@@ -1,0 +1,146 @@
+"""The node/topic graph `rostool graph` and `rostool bag graph` draw, as rqt_graph shows it.
+
+Built from the `Graph` protocol only (node_names, topics, services, node_info for ROS 2 service clients),
+or from a bag's connections. Renderers (graph_text, graph_draw) take a `RosGraph` and never a backend.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+from rostool.graph.base import hidden_name
+
+if TYPE_CHECKING:
+    from rostool.graph.base import Graph
+
+# what rqt_graph's "hide debug" and ros2cli leave out: logging, parameter events, our own probe node
+QUIET_TOPICS = frozenset({"/rosout", "/rosout_agg", "/parameter_events"})
+QUIET_NODES = frozenset({"/rosout", "_NODE_NAME_UNKNOWN_"})
+OWN_NODE = re.compile(r"^/rostool(_\d+)?$")
+# every rclpy/roscpp node serves these: noise in a graph of what the nodes do
+HOUSEKEEPING_SERVICES = (
+    "describe_parameters", "get_parameter_types", "get_parameters", "list_parameters", "set_parameters",
+    "set_parameters_atomically", "get_type_description", "get_loggers", "set_logger_level",
+)  # fmt: skip
+
+
+@dataclass
+class TopicEdges:
+    name: str
+    type: str
+    publishers: list[str] = field(default_factory=list)
+    subscribers: list[str] = field(default_factory=list)
+    count: int | None = None  # messages, for a bag's topics
+
+
+@dataclass
+class ServiceEdges:
+    name: str
+    type: str | None
+    servers: list[str] = field(default_factory=list)
+    clients: list[str] = field(default_factory=list)
+
+
+@dataclass
+class RosGraph:
+    nodes: list[str]
+    topics: list[TopicEdges]
+    services: list[ServiceEdges] = field(default_factory=list)
+    recorded: bool = False  # a bag's graph: topics have no subscribers to show
+
+    def as_json(self) -> dict[str, Any]:
+        return {
+            "nodes": self.nodes,
+            "topics": [{k: v for k, v in vars(t).items() if v is not None} for t in self.topics],
+            "services": [vars(s) for s in self.services],
+        }
+
+
+def in_namespace(name: str, ns: str) -> bool:
+    ns = "/" + ns.strip("/")
+    return ns == "/" or name == ns or name.startswith(ns + "/")
+
+
+def quiet_node(name: str) -> bool:
+    return name in QUIET_NODES or hidden_name(name) or bool(OWN_NODE.match(name))
+
+
+def quiet_topic(name: str) -> bool:
+    return name in QUIET_TOPICS or hidden_name(name)
+
+
+def quiet_service(name: str) -> bool:
+    return hidden_name(name) or name.rsplit("/", 1)[-1] in HOUSEKEEPING_SERVICES
+
+
+def collect(graph: Graph, services: bool = False, show_all: bool = False, ns: str | None = None) -> RosGraph:
+    """The live graph: every node, topic and (with `services`) service, filtered like rqt_graph."""
+    nodes = set(graph.node_names())
+    topics = [TopicEdges(t.name, t.type, sorted(t.publishers), sorted(t.subscribers)) for t in graph.topics()]
+    nodes.update(n for t in topics for n in (*t.publishers, *t.subscribers))
+    found_services: list[ServiceEdges] = []
+    if services:
+        found_services = [
+            ServiceEdges(name, kind, sorted(servers)) for name, kind, servers in graph.services()
+        ]
+        if graph.style == "ros2":
+            # ROS 2 endpoints say who calls a service; a ROS 1 master only knows servers, and asking
+            # every ROS 1 node over XML-RPC would not tell either
+            by_name = {s.name: s for s in found_services}
+            for node in sorted(nodes):
+                if quiet_node(node) and not show_all:
+                    continue
+                for name, kind in graph.node_info(node).service_clients:
+                    entry = by_name.setdefault(name, ServiceEdges(name, kind))
+                    entry.clients.append(node)
+            found_services = sorted(by_name.values(), key=lambda s: s.name)
+    return select(RosGraph(sorted(nodes), topics, found_services), show_all, ns)
+
+
+def select(full: RosGraph, show_all: bool = False, ns: str | None = None) -> RosGraph:
+    """Drop the quiet names (unless `show_all`); with `ns`, keep the nodes and topics under it and the
+    topics those nodes use (so a namespace's nodes still show what they talk to)."""
+    nodes = [n for n in full.nodes if show_all or not quiet_node(n)]
+    if ns is not None:
+        nodes = [n for n in nodes if in_namespace(n, ns)]
+    kept = set(nodes)
+    topics = []
+    for topic in full.topics:
+        if not show_all and quiet_topic(topic.name):
+            continue
+        pubs = [n for n in topic.publishers if n in kept]
+        subs = [n for n in topic.subscribers if n in kept]
+        inside = ns is not None and in_namespace(topic.name, ns)
+        if pubs or subs or inside:
+            topics.append(TopicEdges(topic.name, topic.type, pubs, subs))
+    found_services = []
+    for service in full.services:
+        if not show_all and quiet_service(service.name):
+            continue
+        servers = [n for n in service.servers if n in kept]
+        clients = [n for n in service.clients if n in kept]
+        if servers or clients:
+            found_services.append(ServiceEdges(service.name, service.type, servers, clients))
+    return RosGraph(nodes, topics, found_services)
+
+
+def from_bag(reader: Any) -> RosGraph:
+    """A bag's topics and types; a ROS 1 bag also names each connection's publishing node (callerid)."""
+    topics: dict[str, TopicEdges] = {}
+    nodes: set[str] = set()
+    for conn in reader.connections:
+        msgtype = reader.topics[conn.topic].msgtype
+        if reader.ros_version == 1:
+            msgtype = msgtype.replace("/msg/", "/")  # rosbag's own form
+        entry = topics.setdefault(
+            conn.topic, TopicEdges(conn.topic, msgtype, count=reader.topics[conn.topic].count)
+        )
+        callerid = getattr(conn.ext, "callerid", None)
+        if callerid and callerid not in entry.publishers:
+            entry.publishers.append(callerid)
+            nodes.add(callerid)
+    for entry in topics.values():
+        entry.publishers.sort()
+    return RosGraph(sorted(nodes), [topics[name] for name in sorted(topics)], recorded=True)
