@@ -18,7 +18,9 @@ from typing import TYPE_CHECKING, Any, Literal
 from rostool.errors import RostoolError
 from rostool.graph.base import NodeInfo, Received, Subscription, TopicInfo
 from rostool.graph.rclpy import types as rtypes
+from rostool.graph.rclpy.params import ParameterVerbs
 from rostool.graph.rclpy.refusals import NotYet
+from rostool.graph.rclpy.services import ServiceVerbs
 from rostool.graph.ros2 import dds
 from rostool.graph.ros2.names import resolve
 from rostool.graph.ros2.types import TypeSupport
@@ -36,7 +38,7 @@ TOPIC_WAIT_SECONDS = 1.5  # topic_type: how long a topic without publishers is g
 UNKNOWN_NODE = "_NODE_NAME_UNKNOWN_"  # what ros2cli (and the DDS backend) show for endpoints of no node
 
 
-class RclpyGraph(NotYet):
+class RclpyGraph(ServiceVerbs, ParameterVerbs, NotYet):
     ros_version = 2
     style: Literal["ros1", "ros2"] = "ros2"
     encoding: Encoding = "cdr"
@@ -122,10 +124,13 @@ class RclpyGraph(NotYet):
         changed = started
         while True:
             now = time.monotonic()
-            found = bool(last[0]) or bool({name for name, _types in last[1]} - baseline)
+            named = bool(last[0])
+            found = named or bool({name for name, _types in last[1]} - baseline)
             if until is not None and until():
                 return True
-            if found and (self._settled or now - changed >= GRAPH_QUIET_SECONDS):
+            # endpoints may come before their node's name (rmw learns names from ros_discovery_info)
+            quiet = named and now - changed >= GRAPH_QUIET_SECONDS
+            if found and (self._settled or quiet or now - started >= SETTLE_MAX_SECONDS):
                 self._settled = True
                 return True
             if not found and now - started >= SETTLE_MAX_SECONDS:

@@ -6,6 +6,7 @@ from collections.abc import Callable
 from typing import Any
 
 from rostool.errors import RostoolError
+from rostool.graph.ros2.protocol import ros1_only
 
 
 def not_yet(what: str) -> RostoolError:
@@ -25,29 +26,14 @@ class NotYet:
     def record_source(self, warn: Callable[[str], None], include_hidden: bool = False) -> Any:
         raise not_yet("bag record")
 
-    def services(self) -> list[tuple[str, str | None, list[str]]]:
-        raise not_yet("service list")
-
-    def service_type(self, name: str) -> str:
-        raise not_yet("service type")
-
     def service_uri(self, name: str) -> str:
-        raise not_yet("service uri")
+        raise ros1_only("service uri")
 
     def service_nodes(self, name: str) -> list[str]:
-        raise not_yet("service node")
+        raise ros1_only("service node (on ROS 2: service list -n)")
 
     def service_args(self, name: str) -> str:
-        raise not_yet("service args")
-
-    def service_info(self, name: str) -> dict[str, Any] | None:
-        raise not_yet("service info")
-
-    def find_services(self, type_name: str) -> list[str]:
-        raise not_yet("service find")
-
-    def service_call(self, name: str, values: tuple[str, ...], wait: bool, timeout: float | None) -> Any:
-        raise not_yet("service call")
+        raise ros1_only("service args")
 
     def actions(self) -> list[Any]:
         raise not_yet("action list")
@@ -60,6 +46,3 @@ class NotYet:
 
     def cancel_goals(self, name: str, goal_id: str | None) -> list[Any]:
         raise not_yet("action cancel")
-
-    def parameters(self, node: str | None, timeout: float = 5.0) -> Any:
-        raise not_yet("param")

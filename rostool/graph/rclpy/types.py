@@ -32,6 +32,10 @@ def python_class(store_name: str) -> Any:
             f"that builds {pkg}, or {WAY_OUT}, which reads .msg sources and asks publishers for their types"
         ) from None
     found = getattr(module, name, None)
+    if found is None and "_" in name:  # an action's parts (`Fibonacci_Goal`) live in its own module only
+        base = getattr(module, name.partition("_")[0], None)
+        if base is not None:
+            found = getattr(importlib.import_module(base.__module__), name, None)
     if found is None:
         raise RostoolError(f"unknown type {store_name}: the {pkg} package rclpy imports has no {kind} {name}")
     return found
@@ -82,11 +86,23 @@ def describe(cls: Any) -> tuple[list[tuple[str, str]], list[str]]:
     """(fields as (name, .msg type), nested message types) of an rclpy message class."""
     fields: list[tuple[str, str]] = []
     nested: list[str] = []
-    for name, idl in cls.get_fields_and_field_types().items():
+    slots = getattr(cls, "SLOT_TYPES", ())
+    for index, (name, idl) in enumerate(cls.get_fields_and_field_types().items()):
         kind, inner = _msg_type(idl)
+        full = _namespaced(slots[index]) if index < len(slots) else None
+        if full is not None and inner:  # the class knows the nested type's namespace (`pkg/action/X_Goal`)
+            kind, inner = kind.replace(inner[0].replace("/msg/", "/"), full), [full]
         fields.append((name, kind))
         nested += inner
     return fields, nested
+
+
+def _namespaced(slot: Any) -> str | None:
+    """`pkg/kind/Name` of a rosidl NamespacedType (also inside a sequence or an array), else None."""
+    while hasattr(slot, "value_type"):
+        slot = slot.value_type
+    namespaces = getattr(slot, "namespaces", None)
+    return "/".join([*namespaces, slot.name]) if namespaces and len(namespaces) == 2 else None
 
 
 def _msg_type(idl: str) -> tuple[str, list[str]]:
@@ -110,3 +126,28 @@ def _base(idl: str) -> tuple[str, list[str]]:
         store_name = f"{pkg}/{name}" if pkg.count("/") else f"{pkg}/msg/{name}"
         return idl, [store_name]
     return _PRIMITIVES.get(idl, idl), []
+
+
+def to_rclpy(types: Any, message: object, store_name: str, cls: Any) -> Any:
+    """A rosbags message as an instance of the class rclpy imports, through its CDR bytes."""
+    from rclpy.serialization import deserialize_message
+
+    return deserialize_message(types.serialize(message, store_name), cls)
+
+
+def from_rclpy(types: Any, message: object, store_name: str) -> Any:
+    """An rclpy message as rosbags' message of `store_name`, through its CDR bytes. rmw's serialization
+    may leave more padding at the end than rosbags' size check allows, so the bytes past the message are
+    not checked."""
+    from rclpy.serialization import serialize_message
+
+    raw = memoryview(serialize_message(message))
+    msgdef = types.store.get_msgdef(store_name)
+    read = msgdef.deserialize_cdr_le if raw[1] else msgdef.deserialize_cdr_be
+    try:
+        found, _end = read(raw[4:], 0, msgdef.cls, types.store)
+    except Exception as err:  # struct.error, ValueError: the class and rosbags' description disagree
+        raise RostoolError(
+            f"type {store_name}: rosbags cannot read what rclpy's class holds ({' '.join(str(err).split())})"
+        ) from None
+    return found
