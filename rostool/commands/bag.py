@@ -57,6 +57,15 @@ def distro_option(func: Callable[..., Any]) -> Callable[..., Any]:
     )(func)
 
 
+jobs_option = click.option(
+    "-j",
+    "--jobs",
+    type=click.IntRange(min=1),
+    metavar="N",
+    help="Work on N bags at once, in parallel processes (default: the number of cores).",
+)
+
+
 def _topic_list(values: Sequence[str]) -> list[str]:
     """`--topics /a --topics /b`, `--topics "/a /b"` and `--topics /a,/b` all work."""
     return [name for value in values for name in value.replace(",", " ").split()]

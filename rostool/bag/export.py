@@ -1,0 +1,268 @@
+"""`rostool bag export`: one table per topic (Parquet or CSV), streamed in batches; images as PNG or MP4.
+
+Each topic's rows are buffered column by column and written every `batch_rows` rows or `batch_bytes`
+bytes of messages (a Parquet row group, or CSV lines), so memory stays flat on a bag of any size.
+Files are written under a `.partial` name and renamed when complete; an interrupted export removes them.
+Layout: OUT/TOPIC.parquet for one bag; OUT/TOPIC/bag=NAME/part-0.parquet (a hive-partitioned dataset)
+when a bag is exported as part of several (`partition`). TOPIC is the topic name without its leading
+slash, with `/` replaced by `.` (`/turtle1/cmd_vel` -> `turtle1.cmd_vel`).
+"""
+
+from __future__ import annotations
+
+import csv
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Literal
+
+from rostool.bag.export_columns import Column, TypePlan, arrow_type, is_scalar
+from rostool.bag.open import warn
+from rostool.errors import RostoolError
+
+TableFormat = Literal["parquet", "csv"]
+EXTRA_HINT = "pip install 'rostool[export]'"
+IMAGE_TYPES = ("sensor_msgs/msg/Image", "sensor_msgs/msg/CompressedImage")
+
+
+@dataclass
+class ExportOptions:
+    fmt: TableFormat | None  # None: images only
+    out: Path | None
+    topics: Sequence[str] = ()
+    images: Path | None = None
+    video: bool = False
+    distro: str = "humble"
+    batch_rows: int = 8192
+    batch_bytes: int = 32 * 1024 * 1024
+
+
+@dataclass
+class ExportResult:
+    bag: str
+    messages: int = 0
+    bytes: int = 0
+    files: list[str] = field(default_factory=list)
+    images: int = 0
+
+
+def require_extras(options: ExportOptions) -> None:
+    """One line naming the extra when a module the chosen outputs need is missing."""
+    from importlib.util import find_spec
+
+    needs = []
+    if options.fmt == "parquet":
+        needs.append(("pyarrow", "--format parquet"))
+    if options.images is not None:
+        needs.append(("PIL", "--images"))
+        needs.append(("numpy", "--images"))
+    if options.video:
+        needs.append(("av", "--video"))
+    for module, what in needs:
+        if find_spec(module) is None:
+            raise RostoolError(f"{what} needs the {module} module: {EXTRA_HINT}")
+
+
+def topic_file(topic: str) -> str:
+    return topic.strip("/").replace("/", ".") or "_"
+
+
+def table_path(out: Path, topic: str, fmt: TableFormat, partition: str | None) -> Path:
+    if partition is None:
+        return out / f"{topic_file(topic)}.{fmt}"
+    return out / topic_file(topic) / f"bag={partition}" / f"part-0.{fmt}"
+
+
+def export_bag(path: Path | str, options: ExportOptions, partition: str | None = None) -> ExportResult:
+    """Export one bag; `partition` (the bag's name) selects the dataset layout for several bags."""
+    from rostool.bag.reader import BagReader
+
+    result = ExportResult(str(path))
+    with BagReader([path], options.distro) as reader:
+        wanted = options.topics
+        if partition is not None:  # a fleet: a topic some bags lack is not an error
+            wanted = [name for name in wanted if name in reader.topics]
+            if options.topics and not wanted:
+                return result
+        conns = reader.select(wanted)
+        style = "ros1" if reader.ros_version == 1 else "ros2"
+        tables: dict[str, _Table] = {}
+        images: dict[str, Any] = {}
+        skipped: set[str] = set()
+        try:
+            for conn, timestamp, data in reader.messages(conns) if conns else ():
+                msg = reader.deserialize(data, conn)
+                result.messages += 1
+                result.bytes += len(data)
+                topic = conn.topic
+                if conn.msgtype in IMAGE_TYPES and options.images is not None:
+                    sink = images.get(topic)
+                    if sink is None:
+                        sink = images[topic] = _image_sink(options, topic, partition)
+                    result.images += sink.add(msg, timestamp)
+                if options.fmt is None or options.out is None:
+                    continue
+                table = tables.get(topic)
+                if table is None:
+                    plan = TypePlan(reader.resolver.store.fielddefs, style, reader.ros_version)
+                    where = table_path(options.out, topic, options.fmt, partition)
+                    table = tables[topic] = _Table(conn.msgtype, plan.columns(conn.msgtype), where, options)
+                elif conn.msgtype != table.msgtype:
+                    if topic not in skipped:
+                        skipped.add(topic)
+                        warn(
+                            f"{topic}: left out its {conn.msgtype} messages (the table holds {table.msgtype})"
+                        )
+                    continue
+                table.add(msg, timestamp, len(data))
+            if options.fmt is not None and options.out is not None:
+                _empty_tables(reader, conns, tables, options, style, partition)
+            for table in tables.values():
+                result.files.append(str(table.close()))
+            for sink in images.values():
+                result.files.extend(str(p) for p in sink.close())
+        except BaseException:
+            for table in tables.values():
+                table.discard()
+            for sink in images.values():
+                sink.discard()
+            raise
+    return result
+
+
+def _empty_tables(
+    reader: Any,
+    conns: Sequence[Any],
+    tables: dict[str, _Table],
+    options: ExportOptions,
+    style: Any,
+    partition: str | None,
+) -> None:
+    """Topics without messages still get a table (with its columns) when their type is known."""
+    assert options.fmt is not None and options.out is not None
+    fielddefs = reader.resolver.store.fielddefs
+    for conn in conns:
+        if conn.topic in tables or conn.msgtype not in fielddefs:
+            continue
+        plan = TypePlan(fielddefs, style, reader.ros_version)
+        where = table_path(options.out, conn.topic, options.fmt, partition)
+        tables[conn.topic] = _Table(conn.msgtype, plan.columns(conn.msgtype), where, options)
+
+
+def _image_sink(options: ExportOptions, topic: str, partition: str | None) -> Any:
+    from rostool.bag.export_images import ImageSink
+
+    assert options.images is not None
+    base = options.images / f"bag={partition}" if partition is not None else options.images
+    return ImageSink(base, topic_file(topic), topic, video=options.video)
+
+
+class _Table:
+    """One topic's rows, buffered by column and written in batches."""
+
+    def __init__(self, msgtype: str, columns: list[Column], path: Path, options: ExportOptions) -> None:
+        self.msgtype = msgtype
+        self.columns = columns
+        self.path = path
+        self.partial = path.with_name(path.name + ".partial")
+        self.batch_rows = options.batch_rows
+        self.batch_bytes = options.batch_bytes
+        self._getters = [column.get for column in columns[1:]]
+        self._values: list[list[Any]] = [[] for _ in columns]
+        self._bytes = 0
+        path.parent.mkdir(parents=True, exist_ok=True)
+        self.sink: _ParquetSink | _CsvSink = (
+            _ParquetSink(self.partial, columns)
+            if options.fmt == "parquet"
+            else _CsvSink(self.partial, columns)
+        )
+
+    def add(self, msg: object, timestamp: int, size: int) -> None:
+        values = self._values
+        values[0].append(timestamp)
+        for column, get in zip(values[1:], self._getters, strict=True):
+            column.append(get(msg))
+        self._bytes += size
+        if len(values[0]) >= self.batch_rows or self._bytes >= self.batch_bytes:
+            self.flush()
+
+    def flush(self) -> None:
+        if self._values[0]:
+            self.sink.write(self._values)
+        self._values = [[] for _ in self.columns]
+        self._bytes = 0
+
+    def close(self) -> Path:
+        self.flush()
+        self.sink.close()
+        self.partial.replace(self.path)
+        return self.path
+
+    def discard(self) -> None:
+        try:
+            self.sink.close()
+        finally:
+            self.partial.unlink(missing_ok=True)
+
+
+class _ParquetSink:
+    def __init__(self, path: Path, columns: list[Column]) -> None:
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+
+        self._pa = pa
+        self.schema = pa.schema([(column.name, arrow_type(column.spec)) for column in columns])
+        self.writer = pq.ParquetWriter(path, self.schema, compression="zstd")
+        self._closed = False
+
+    def write(self, values: list[list[Any]]) -> None:
+        pa = self._pa
+        arrays = [pa.array(column, type=f.type) for column, f in zip(values, self.schema, strict=True)]
+        self.writer.write_batch(pa.RecordBatch.from_arrays(arrays, schema=self.schema))
+
+    def close(self) -> None:
+        if not self._closed:
+            self._closed = True
+            self.writer.close()
+
+
+class _CsvSink:
+    """Scalars as text (bool as true/false); byte arrays, arrays and structs as JSON text."""
+
+    def __init__(self, path: Path, columns: list[Column]) -> None:
+        self.handle = path.open("w", newline="", encoding="utf-8")
+        self.writer = csv.writer(self.handle, lineterminator="\n")
+        self.writer.writerow([column.name for column in columns])
+        self.convert = [_csv_converter(column) for column in columns]
+
+    def write(self, values: list[list[Any]]) -> None:
+        converted = [
+            column if convert is None else [convert(value) for value in column]
+            for column, convert in zip(values, self.convert, strict=True)
+        ]
+        self.writer.writerows(zip(*converted, strict=True))
+
+    def close(self) -> None:
+        self.handle.close()
+
+
+def _csv_converter(column: Column) -> Any:
+    from rostool.output.json_text import dumps
+
+    if column.spec == "bool":
+        return lambda value: "true" if value else "false"
+    if is_scalar(column.spec):
+        return None
+    return lambda value: dumps(_json_ready(value))
+
+
+def _json_ready(value: Any) -> Any:
+    if isinstance(value, (bytes, bytearray)):
+        return list(value)
+    if hasattr(value, "tolist"):
+        return value.tolist()
+    if isinstance(value, dict):
+        return {key: _json_ready(item) for key, item in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_json_ready(item) for item in value]
+    return value

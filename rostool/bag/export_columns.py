@@ -1,0 +1,157 @@
+"""A message type as table columns, from its definition (not from values, so every batch has one schema).
+
+Nested fields are flattened to dotted names (`pose.position.x`); Time/Duration fields become two integer
+columns named as `bag echo` names them (`secs`/`nsecs` for ROS 1 bags, `sec`/`nanosec` for ROS 2);
+byte arrays (uint8[], char[]) are one binary value; other arrays are lists, arrays of
+messages lists of structs. `Spec` describes a column's type without pyarrow, so CSV needs no extra.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from operator import attrgetter
+from typing import Any
+
+from rostool.output.plain import TIME_TYPES, TimeStyle
+
+# A column type: a primitive name ("int32", "string", "binary", ...), ("list", Spec) or
+# ("struct", ((name, Spec), ...)).
+Spec = str | tuple[str, Any]
+
+_PRIMITIVES = {
+    "bool": "bool", "int8": "int8", "uint8": "uint8", "int16": "int16", "uint16": "uint16",
+    "int32": "int32", "uint32": "uint32", "int64": "int64", "uint64": "uint64", "float32": "float32",
+    "float64": "float64", "string": "string", "wstring": "string", "octet": "uint8", "char": "uint8",
+    "byte": "int8",  # as rosbags decodes it (ROS 1 and ROS 2)
+}  # fmt: skip
+_SKIPPED_FIELDS = ("structure_needs_at_least_one_member",)
+HEADER = "std_msgs/msg/Header"
+TIME_COLUMN = "t"
+STAMP_COLUMN = "stamp"
+
+
+@dataclass(frozen=True)
+class Column:
+    name: str
+    spec: Spec
+    get: Callable[[object], Any]  # message -> a value pyarrow takes for `spec` (bytes, lists, dicts)
+
+
+class TypePlan:
+    """Turns fielddefs (rosbags' `store.fielddefs`) into columns for one message type."""
+
+    def __init__(self, fielddefs: Mapping[str, Any], style: TimeStyle, ros_version: int) -> None:
+        self.fielddefs = fielddefs
+        self.style = style
+        self.ros_version = ros_version
+        self._time_names = ("secs", "nsecs") if style == "ros1" else ("sec", "nanosec")
+
+    def fields(self, msgtype: str) -> list[tuple[str, Any]]:
+        return [(name, desc) for name, desc in self.fielddefs[msgtype][1] if name not in _SKIPPED_FIELDS]
+
+    def base(self, name: str) -> str:
+        return _PRIMITIVES.get(name, "string")
+
+    def is_bytes(self, element: Any) -> bool:
+        return element[0] == 1 and self.base(element[1][0]) == "uint8"  # Nodetype.BASE
+
+    def spec(self, desc: Any) -> Spec:
+        """The column type of a field description (Nodetype BASE 1, NAME 2, ARRAY 3, SEQUENCE 4)."""
+        kind, rest = desc
+        if kind == 1:
+            return self.base(rest[0])
+        if kind == 2:
+            if rest in TIME_TYPES:
+                return ("struct", ((self._time_names[0], "int32"), (self._time_names[1], "uint32")))
+            members = tuple((name, self.spec(sub)) for name, sub in self.fields(rest))
+            # Parquet has no empty struct: an empty message keeps rosbags' placeholder member (always null)
+            return ("struct", members or ((_SKIPPED_FIELDS[0], "uint8"),))
+        element = rest[0]
+        return "binary" if self.is_bytes(element) else ("list", self.spec(element))
+
+    def columns(self, msgtype: str) -> list[Column]:
+        """The receive time `t`, the header's `stamp` (when the type has a header), then the fields."""
+        fields = self.fields(msgtype)
+        names = {name for name, _ in fields}
+        time_name = TIME_COLUMN if TIME_COLUMN not in names else f"_{TIME_COLUMN}"
+        columns = [Column(time_name, "int64", _never)]
+        header = next((desc for name, desc in fields if name == "header"), None)
+        if header == (2, HEADER):
+            stamp_name = STAMP_COLUMN if STAMP_COLUMN not in names else f"_{STAMP_COLUMN}"
+            columns.append(Column(stamp_name, "int64", _stamp_ns))
+        for name, desc in fields:
+            columns.extend(self._flat(name, desc))
+        return columns
+
+    def _flat(self, path: str, desc: Any) -> list[Column]:
+        kind, rest = desc
+        if kind == 2 and rest in TIME_TYPES:
+            sec, nanosec = self._time_names
+            return [
+                Column(f"{path}.{sec}", "int32", attrgetter(f"{path}.sec")),
+                Column(f"{path}.{nanosec}", "uint32", attrgetter(f"{path}.nanosec")),
+            ]
+        if kind == 2:
+            return [column for name, sub in self.fields(rest) for column in self._flat(f"{path}.{name}", sub)]
+        get = attrgetter(path)
+        spec = self.spec(desc)
+        if spec == "binary":
+            return [Column(path, spec, lambda msg: _bytes(get(msg)))]
+        if kind == 1:
+            return [Column(path, spec, get)]
+        element = rest[0]
+        if element[0] == 1:  # numpy arrays and lists of primitives go to pyarrow as they are
+            return [Column(path, spec, get)]
+        plain = self.plain
+        return [Column(path, spec, lambda msg: [plain(item) for item in get(msg)])]
+
+    def plain(self, value: Any) -> Any:
+        """A nested message as the dict pyarrow takes for its struct (byte arrays as bytes)."""
+        msgtype = getattr(value, "__msgtype__", "")
+        if msgtype in TIME_TYPES:
+            return {self._time_names[0]: int(value.sec), self._time_names[1]: int(value.nanosec)}
+        out: dict[str, Any] = {}
+        for name, desc in self.fields(msgtype):
+            field = getattr(value, name)
+            kind, rest = desc
+            if kind == 2:
+                out[name] = self.plain(field)
+            elif kind == 1:
+                out[name] = field
+            elif self.is_bytes(rest[0]):
+                out[name] = _bytes(field)
+            elif rest[0][0] == 1:
+                out[name] = field.tolist() if hasattr(field, "tolist") else list(field)
+            else:
+                out[name] = [self.plain(item) for item in field]
+        return out
+
+
+def _never(msg: object) -> Any:
+    raise AssertionError("the receive time is not a message field")
+
+
+def _stamp_ns(msg: Any) -> int:
+    stamp = msg.header.stamp
+    return int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec)
+
+
+def _bytes(value: Any) -> bytes:
+    return value.tobytes() if hasattr(value, "tobytes") else bytes(value)
+
+
+def arrow_type(spec: Spec) -> Any:
+    """The pyarrow type of a column spec."""
+    import pyarrow as pa
+
+    if isinstance(spec, tuple):
+        kind, inner = spec
+        if kind == "list":
+            return pa.list_(arrow_type(inner))
+        return pa.struct([(name, arrow_type(sub)) for name, sub in inner])
+    return getattr(pa, "bool_" if spec == "bool" else spec)()
+
+
+def is_scalar(spec: Spec) -> bool:
+    return isinstance(spec, str) and spec != "binary"

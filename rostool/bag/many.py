@@ -1,0 +1,195 @@
+"""Several bags at once: expanding directories into bags, and running one job per bag in parallel processes.
+
+A directory that is a rosbag2 bag (it has metadata.yaml, or holds only the .mcap/.db3 files of one split
+bag) is one bag; any other directory is searched (recursively) for bags: .bag/.mcap/.db3 files and
+rosbag2 directories. Results come back in the order of the bags (as given; a directory's bags sorted by
+path), however the processes finish. One progress bar on stderr when it is a terminal.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import signal
+import sys
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, TypeVar
+
+from rostool.errors import RostoolError
+
+BAG_SUFFIXES = (".bag", ".mcap", ".db3")
+_SPLIT = re.compile(r"^(.*)_\d+$")
+T = TypeVar("T")
+
+
+@dataclass(frozen=True)
+class BagItem:
+    path: Path
+    name: str  # unique among the bags of one command, safe as a hive partition value
+
+
+def is_one_bag(path: Path) -> bool:
+    """A directory that is itself a bag: rosbag2's metadata.yaml, or storage files of one split bag."""
+    if (path / "metadata.yaml").exists():
+        return True
+    entries = list(path.iterdir())
+    if any(entry.is_dir() or entry.suffix == ".bag" for entry in entries):
+        return False
+    storage = [entry for entry in entries if entry.suffix in (".mcap", ".db3")]
+    if not storage:
+        return True  # not a bag either: the reader says so in one line
+    if len(storage) == 1:
+        return True
+    prefixes = {(match.group(1) if (match := _SPLIT.match(entry.stem)) else entry.stem) for entry in storage}
+    return len(prefixes) == 1 and len({entry.suffix for entry in storage}) == 1
+
+
+def expand(paths: Sequence[str | Path]) -> list[BagItem]:
+    """The bags that PATHs name, in order; names unique (the file stem, or the path below a directory)."""
+    found: list[tuple[Path, str]] = []
+    for given in paths:
+        path = Path(given)
+        if path.is_dir() and not is_one_bag(path):
+            inside = sorted(_walk(path))
+            if not inside:
+                raise RostoolError(f"{path}: no bags in this directory (.bag, .mcap, .db3 or rosbag2 dirs)")
+            found.extend((bag, _name(bag.relative_to(path))) for bag in inside)
+        else:
+            found.append((path, _name(Path(path.parent.name if path.name == "metadata.yaml" else path.name))))
+    names = [name for _, name in found]
+    items = []
+    for path, name in found:
+        if names.count(name) > 1:  # same stem twice (a/run.bag, b/run.bag given one by one)
+            name = _name(Path(str(path).strip("/")))
+        items.append(BagItem(path, name))
+    return items
+
+
+def _walk(directory: Path) -> Iterator[Path]:
+    for entry in directory.iterdir():
+        if entry.is_dir():
+            storage = any(p.suffix in (".mcap", ".db3") for p in entry.iterdir())
+            if (entry / "metadata.yaml").exists() or (storage and is_one_bag(entry)):
+                yield entry
+            else:
+                yield from _walk(entry)
+        elif entry.suffix in BAG_SUFFIXES:
+            yield entry
+
+
+def _name(relative: Path) -> str:
+    stem = relative.with_suffix("") if relative.suffix in BAG_SUFFIXES else relative
+    return re.sub(r"[^A-Za-z0-9_.-]", "_", str(stem).replace("/", "__")) or "bag"
+
+
+def default_jobs() -> int:
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+
+
+@dataclass
+class Failure:
+    message: str
+    exit_code: int = 1
+
+
+def _call(func: Callable[[BagItem], T], item: BagItem) -> T | Failure:
+    try:
+        return func(item)
+    except RostoolError as err:
+        return Failure(str(err), err.exit_code)
+
+
+def _ignore_sigint() -> None:
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent ends the workers on Ctrl+C
+
+
+def run(
+    func: Callable[[BagItem], T],
+    items: Sequence[BagItem],
+    jobs: int | None,
+    label: str = "bags",
+) -> Iterator[tuple[BagItem, T | Failure]]:
+    """(item, func(item) or its Failure) for every bag, in the order of `items`. `func` must be a module-level
+    function (it runs in worker processes when jobs > 1)."""
+    jobs = default_jobs() if jobs is None else jobs
+    with _Progress(len(items), label) as progress:
+        if jobs <= 1 or len(items) <= 1:
+            for item in items:
+                result = _call(func, item)
+                progress.advance()
+                yield item, result
+            return
+        import multiprocessing
+        from concurrent.futures import ProcessPoolExecutor
+
+        context = multiprocessing.get_context("forkserver")
+        pool = ProcessPoolExecutor(min(jobs, len(items)), mp_context=context, initializer=_ignore_sigint)
+        try:
+            futures = [pool.submit(_call, func, item) for item in items]
+            for future in futures:
+                future.add_done_callback(lambda _f: progress.advance())
+            for item, future in zip(items, futures, strict=True):
+                yield item, future.result()
+        except BaseException:
+            pool.shutdown(wait=False, cancel_futures=True)
+            for process in list(getattr(pool, "_processes", {}).values()):
+                process.terminate()
+            raise
+        pool.shutdown()
+
+
+class _Progress:
+    """One rich progress bar over the bags on a terminal; nothing otherwise."""
+
+    def __init__(self, total: int, label: str) -> None:
+        self.total = total
+        self.label = label
+        self._bar: Any = None
+        self._task: Any = None
+
+    def __enter__(self) -> _Progress:
+        if self.total > 1 and sys.stderr.isatty():
+            from rich.console import Console
+            from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+            self._bar = Progress(
+                TextColumn("{task.description}"),
+                BarColumn(),
+                MofNCompleteColumn(),
+                TimeElapsedColumn(),
+                console=Console(stderr=True),
+                transient=True,
+            )
+            self._bar.start()
+            self._task = self._bar.add_task(self.label, total=self.total)
+        return self
+
+    def advance(self) -> None:
+        if self._bar is not None:
+            self._bar.advance(self._task)
+
+    def __exit__(self, *exc: object) -> None:
+        if self._bar is not None:
+            self._bar.stop()
+
+
+def successes(
+    func: Callable[[BagItem], T], items: Sequence[BagItem], jobs: int | None, label: str = "bags"
+) -> Iterator[tuple[BagItem, T]]:
+    """`run`, keeping what succeeded. One bag: its failure is the command's error. Several: each failure
+    is one line on stderr as it comes, the others go on, and a last line ends with a non-zero exit."""
+    failed = 0
+    for item, result in run(func, items, jobs, label):
+        if not isinstance(result, Failure):
+            yield item, result
+        elif len(items) == 1:
+            raise RostoolError(result.message, result.exit_code)
+        else:
+            import click
+
+            failed += 1
+            click.echo(f"rostool: {result.message}", err=True)
+    if failed:
+        raise RostoolError(f"{failed} of {len(items)} bags failed (see the lines above)")

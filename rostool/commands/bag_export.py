@@ -1,0 +1,106 @@
+"""`rostool bag export`: bags -> one Parquet/CSV table per topic, images -> PNG/MP4 (rostool[export])."""
+
+from __future__ import annotations
+
+from functools import partial
+from pathlib import Path
+
+import click
+
+from rostool.bag.export import ExportOptions, ExportResult
+from rostool.bag.many import BagItem
+from rostool.commands.bag import CONTEXT, _topic_list, distro_option, jobs_option
+from rostool.errors import RostoolError
+
+
+@click.command(context_settings=CONTEXT)
+@click.argument("bags", nargs=-1, required=True, metavar="BAG...")
+@click.option(
+    "--format", "fmt", type=click.Choice(["parquet", "csv"]), default="parquet", show_default=True,
+    help="Table format: Parquet (typed columns, arrays as lists) or CSV (arrays as JSON text).",
+)  # fmt: skip
+@click.option(
+    "-o", "--output", type=click.Path(file_okay=False), metavar="DIR", help="Write the tables here."
+)
+@click.option(
+    "--topics", multiple=True, metavar="T", help="Only these topics (repeatable, or comma-separated)."
+)
+@click.option("--images", type=click.Path(file_okay=False), metavar="DIR",
+              help="Write sensor_msgs Image/CompressedImage messages as PNG files here.")  # fmt: skip
+@click.option("--video", is_flag=True, help="With --images: one MP4 (H.264) per image topic instead of PNGs.")
+@jobs_option
+@distro_option
+def export(
+    bags: tuple[str, ...],
+    fmt: str,
+    output: str | None,
+    topics: tuple[str, ...],
+    images: str | None,
+    video: bool,
+    jobs: int | None,
+    distro: str,
+) -> None:
+    """Export bags to tables: one Parquet (or CSV) file per topic, for pandas, polars, DuckDB or a sheet.
+
+    Columns: `t` (receive time, int64 ns), `stamp` (header stamp, int64 ns, when the type has a header),
+    then every field, nested ones flattened (`pose.position.x`); Time fields as two integer columns
+    (`header.stamp.sec`/`nanosec`, ROS 1: `secs`/`nsecs`); byte arrays (uint8[], image data) as binary;
+    other arrays as typed lists in Parquet and as JSON text in CSV. One bag writes DIR/TOPIC.parquet
+    (`/turtle1/pose` -> `turtle1.pose.parquet`). Several bags, or a directory of bags, write one dataset
+    per topic partitioned by bag, hive-style: DIR/TOPIC/bag=NAME/part-0.parquet, exported in parallel.
+
+    \b
+    Examples:
+      rostool bag export run.bag -o tables/
+      rostool bag export rosbag2_dir --format csv --topics /odom,/tf -o csv/
+      rostool bag export fleet/ -o dataset/ -j 2
+      rostool bag export camera.mcap --images frames/ --topics /camera/image_raw
+      rostool bag export camera.mcap --images videos/ --video
+      duckdb -c "SELECT bag, count(*) FROM read_parquet('dataset/odom/*/*.parquet',
+                 hive_partitioning=true) GROUP BY bag"
+    """
+    from rostool.bag.export import require_extras
+    from rostool.bag.many import expand, successes
+
+    if output is None and images is None:
+        raise RostoolError("say where to write: -o DIR for the tables and/or --images DIR for the images")
+    if video and images is None:
+        raise RostoolError("--video writes the images of --images DIR as MP4: add --images DIR")
+    options = ExportOptions(
+        fmt=fmt if output is not None else None,  # type: ignore[arg-type]
+        out=Path(output) if output is not None else None,
+        topics=_topic_list(topics),
+        images=Path(images) if images is not None else None,
+        video=video,
+        distro=distro,
+    )
+    require_extras(options)
+    items = expand(bags)
+    for where in (options.out, options.images):
+        if where is not None:
+            _make_folder(where)
+    several = len(items) > 1
+    total = ExportResult("")
+    exported = 0
+    for _item, result in successes(partial(_export_one, options, several), items, jobs, "exporting"):
+        exported += 1
+        total.messages += result.messages
+        total.images += result.images
+        total.files.extend(result.files)
+    where = " and ".join(str(p) for p in (options.out, options.images) if p is not None)
+    bags_text = f" from {exported} bags" if several else ""
+    pictures = f" ({total.images} images)" if options.images is not None else ""
+    click.echo(f"exported {total.messages} messages{bags_text}{pictures} to {where}", err=True)
+
+
+def _export_one(options: ExportOptions, several: bool, item: BagItem) -> ExportResult:
+    from rostool.bag.export import export_bag
+
+    return export_bag(item.path, options, partition=item.name if several else None)
+
+
+def _make_folder(path: Path) -> None:
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise RostoolError(f"{path}: cannot create the output folder: {err.strerror or err}") from err
