@@ -4,6 +4,7 @@ every ROS 2 test. It takes roles from its arguments and reports what it sees as 
     {"event": "ready"}                                   after every entity is created
     {"event": "heard", "topic": T, "data": ...}          --listen: each message (std_msgs/String data)
     {"event": "service", "data": true}                   --service: each std_srvs/SetBool request
+    (no events)                                          --echo-service: test_msgs/BasicTypes echo
     {"event": "goal", "order": 5} / "cancel" / "done"    --action: test_msgs/Fibonacci server
     {"event": "param", "name": N, "value": V}            --params: each accepted parameter change
     {"event": "graph", ...}                              --watch: this node's view of the graph
@@ -131,6 +132,20 @@ class Peer(Node):
             from std_srvs.srv import SetBool
 
             self.create_service(SetBool, args.service, self.on_set_bool)
+        if args.echo_service:  # as ros2cli's echo_server fixture: the request's fields back as the response
+            from test_msgs.srv import BasicTypes
+
+            echo = self.create_service(BasicTypes, args.echo_service, self.on_echo)
+            if args.introspect:  # as ros2cli's introspectable fixture: contents on, a client calling
+                from rclpy.qos import qos_profile_system_default
+                from rclpy.service_introspection import ServiceIntrospectionState
+
+                contents = (self.get_clock(), qos_profile_system_default, ServiceIntrospectionState.CONTENTS)
+                echo.configure_introspection(*contents)
+                self.echo_client = self.create_client(BasicTypes, args.echo_service)
+                self.echo_client.configure_introspection(*contents)
+                self.echo_future: object = None
+                self.create_timer(0.5, self.call_echo)
         if args.action:
             from test_msgs.action import Fibonacci
 
@@ -223,6 +238,19 @@ class Peer(Node):
         response.message = f"flag is {request.data}"  # type: ignore[attr-defined]
         return response
 
+    def on_echo(self, request: object, response: object) -> object:
+        for field in request.get_fields_and_field_types():  # type: ignore[attr-defined]
+            setattr(response, field, getattr(request, field))
+        return response
+
+    def call_echo(self) -> None:
+        from test_msgs.srv import BasicTypes
+
+        done = self.echo_future is None or self.echo_future.done()  # type: ignore[attr-defined]
+        if self.echo_client.service_is_ready() and done:
+            request = BasicTypes.Request(bool_value=True, int32_value=42, string_value="test_string_value")
+            self.echo_future = self.echo_client.call_async(request)
+
     def on_cancel(self, _goal: object) -> CancelResponse:
         emit("cancel")
         return CancelResponse.ACCEPT
@@ -290,6 +318,12 @@ def main() -> None:
         help="declare the parameters of that ros2cli ros2param test fixture",
     )
     parser.add_argument("--service", help="serve std_srvs/srv/SetBool here")
+    parser.add_argument("--echo-service", help="serve test_msgs/srv/BasicTypes here, echoing the request")
+    parser.add_argument(
+        "--introspect",
+        action="store_true",
+        help="with --echo-service: introspection contents on, and a client calling it",
+    )
     parser.add_argument("--action", help="serve test_msgs/action/Fibonacci here")
     parser.add_argument("--step", type=float, default=0.1, help="seconds between Fibonacci feedbacks")
     parser.add_argument("--watch", action="store_true", help="report the graph every 0.5 s")
