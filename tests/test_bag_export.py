@@ -176,3 +176,105 @@ def test_topics_option_and_unknown_topic(tmp_path: Path) -> None:
     assert sorted(p.name for p in out.iterdir()) == ["rosout.parquet", "turtle1.pose.parquet"]
     bad = rostool(["bag", "export", str(path), "--topics", "/nope", "-o", str(out)], env())
     assert bad.returncode == 1 and bad.stderr.count("\n") == 1 and "/nope is not in the bag" in bad.stderr
+
+
+def write_image_bag(path: Path) -> dict[str, Any]:
+    """A rosbag2 bag (rosbags' writer) with raw Images in five encodings and PNG/JPEG CompressedImages."""
+    import io
+
+    import numpy as np
+    from PIL import Image
+    from rosbags.rosbag2 import Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    store = get_typestore(Stores.ROS2_JAZZY)
+    types = store.types
+    pixels: dict[str, Any] = {}
+    with Writer(path, version=9) as writer:
+        raw = writer.add_connection("/camera/raw", "sensor_msgs/msg/Image", typestore=store)
+        packed = writer.add_connection(
+            "/camera/compressed", "sensor_msgs/msg/CompressedImage", typestore=store
+        )
+        encodings = [("rgb8", 3, np.uint8), ("bgr8", 3, np.uint8), ("mono8", 1, np.uint8),
+                     ("mono16", 1, np.uint16), ("rgba8", 4, np.uint8)]  # fmt: skip
+        for i, (encoding, channels, dtype) in enumerate(encodings):
+            height, width = 6, 10
+            values = ((np.arange(height * width * channels) * 7 + i) % 250).astype(dtype)
+            if dtype == np.uint16:
+                values = values * 250  # above 255: 16-bit depth survives
+            image = values.reshape(height, width, channels)
+            pixels[encoding] = image
+            stamp = 1_700_000_000_000_000_000 + i * 100_000_000
+            time = types["builtin_interfaces/msg/Time"](sec=stamp // 10**9, nanosec=stamp % 10**9)
+            header = types["std_msgs/msg/Header"](stamp=time, frame_id="camera")
+            data = np.frombuffer(image.tobytes(), dtype=np.uint8)
+            msg = types["sensor_msgs/msg/Image"](
+                header, height, width, encoding, 0, width * channels * image.itemsize, data
+            )
+            writer.write(raw, stamp, store.serialize_cdr(msg, "sensor_msgs/msg/Image"))
+            buffer = io.BytesIO()
+            Image.new("RGB", (8, 4), (255, 0, 0)).save(buffer, format="JPEG" if i % 2 else "PNG")
+            compressed = types["sensor_msgs/msg/CompressedImage"](
+                header, "jpeg" if i % 2 else "png", np.frombuffer(buffer.getvalue(), dtype=np.uint8)
+            )
+            writer.write(
+                packed, stamp + 1, store.serialize_cdr(compressed, "sensor_msgs/msg/CompressedImage")
+            )
+    return pixels
+
+
+def test_images_as_png(tmp_path: Path) -> None:
+    import numpy as np
+    from PIL import Image
+
+    bag = tmp_path / "camera"
+    pixels = write_image_bag(bag)
+    out = tmp_path / "frames"
+    result = rostool(["bag", "export", str(bag), "--images", str(out)], env())
+    assert result.returncode == 0, result.stderr
+    assert "(10 images)" in result.stderr
+    files = sorted((out / "camera.raw").iterdir())
+    assert [f.name for f in files] == [f"{1_700_000_000_000_000_000 + i * 100_000_000}.png" for i in range(5)]
+    decoded = [Image.open(f) for f in files]
+    assert [(im.size, im.mode) for im in decoded] == [
+        ((10, 6), m) for m in ("RGB", "RGB", "L", "I;16", "RGBA")
+    ]
+    arrays = [np.asarray(im) for im in decoded]
+    assert (arrays[0] == pixels["rgb8"]).all()
+    assert (arrays[1] == pixels["bgr8"][:, :, ::-1]).all()  # stored BGR, written RGB
+    assert (arrays[2] == pixels["mono8"][:, :, 0]).all()
+    assert (arrays[3] == pixels["mono16"][:, :, 0]).all() and arrays[3].max() > 255
+    assert (arrays[4] == pixels["rgba8"]).all()
+    compressed = sorted((out / "camera.compressed").iterdir())
+    assert len(compressed) == 5
+    for file in compressed:
+        image = Image.open(file)
+        assert image.format == "PNG" and image.size == (8, 4)
+        assert image.convert("RGB").getpixel((0, 0))[0] > 240  # red, also after JPEG
+
+
+def test_images_as_video(tmp_path: Path) -> None:
+    av = pytest.importorskip("av")
+    bag = tmp_path / "camera"
+    write_image_bag(bag)
+    out = tmp_path / "videos"
+    result = rostool(
+        ["bag", "export", str(bag), "--images", str(out), "--video", "--topics", "/camera/raw"], env()
+    )
+    assert result.returncode == 0, result.stderr
+    with av.open(str(out / "camera.raw.mp4")) as container:
+        frames = list(container.decode(video=0))
+        times = [float(frame.time) for frame in frames]
+    assert len(frames) == 5 and (frames[0].width, frames[0].height) == (10, 6)
+    assert times == pytest.approx([0.0, 0.1, 0.2, 0.3, 0.4], abs=0.002)  # the bag's own timing
+
+
+def test_parquet_image_table_keeps_the_bytes(tmp_path: Path) -> None:
+    bag = tmp_path / "camera"
+    pixels = write_image_bag(bag)
+    out = tmp_path / "tables"
+    assert rostool(["bag", "export", str(bag), "-o", str(out)], env()).returncode == 0
+    table = pq.read_table(out / "camera.raw.parquet")
+    assert table.schema.field("data").type == pa.binary()
+    assert table.column("encoding").to_pylist() == ["rgb8", "bgr8", "mono8", "mono16", "rgba8"]
+    assert table.column("data")[0].as_py() == pixels["rgb8"].tobytes()

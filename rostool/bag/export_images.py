@@ -112,7 +112,7 @@ class ImageSink:
 
 
 class _Mp4:
-    """H.264 (yuv420p, so odd sizes are padded by one pixel) with millisecond presentation times."""
+    """H.264 (yuv420p needs even sizes: odd ones are scaled up a pixel), millisecond presentation times."""
 
     def __init__(self, path: Path, size: tuple[int, int], start_ns: int) -> None:
         import av
