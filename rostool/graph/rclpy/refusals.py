@@ -34,15 +34,3 @@ class NotYet:
 
     def service_args(self, name: str) -> str:
         raise ros1_only("service args")
-
-    def actions(self) -> list[Any]:
-        raise not_yet("action list")
-
-    def action_info(self, name: str, wait: float) -> dict[str, Any]:
-        raise not_yet("action info")
-
-    def send_goal(self, name: str, kind: str | None, goal: Any, timeout: float | None, w: Any) -> Any:
-        raise not_yet("action send-goal")
-
-    def cancel_goals(self, name: str, goal_id: str | None) -> list[Any]:
-        raise not_yet("action cancel")
