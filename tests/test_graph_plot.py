@@ -79,7 +79,7 @@ def test_graph_of_a_real_ros1_graph(debian_master: dict[str, str], tmp_path: Pat
         rosout = next(t for t in every["topics"] if t["name"] == "/rosout")
         assert "/listener" in rosout["publishers"]  # rostopic pub does not log to /rosout
         text = rostool(["graph"], env).stdout.splitlines()
-        assert text[0] == "2 nodes, 1 topics"
+        assert text[0] == "2 nodes, 1 topic"
         assert "/listener" in text and "  pub /chatter [std_msgs/String] -> /listener" in text
         assert f"  sub /chatter [std_msgs/String] <- {publisher}" in text
         services = json.loads(rostool(["graph", "--services", "--json"], env).stdout)["services"]

@@ -24,7 +24,7 @@ def output_option(func: click.decorators.FC) -> click.decorators.FC:
 def render(graph: object, as_dot: bool, as_json: bool, output: Path | None) -> None:
     """One graph to the chosen output: a file, DOT, JSON, or the text tree (rich on a terminal)."""
     from rostool.output.graph_model import RosGraph
-    from rostool.output.graph_text import dot_text, plain_text, print_rich
+    from rostool.output.graph_text import dot_text, plain_text, print_rich, summary
 
     assert isinstance(graph, RosGraph)
     if as_dot and as_json:
@@ -43,7 +43,7 @@ def render(graph: object, as_dot: bool, as_json: bool, output: Path | None) -> N
             output.write_text(dumps(graph.as_json()) + "\n")
         else:
             raise RostoolError(f"{output}: unknown format; name the file .svg, .png, .pdf, .dot or .json")
-        click.echo(f"wrote {output} ({len(graph.nodes)} nodes, {len(graph.topics)} topics)", err=True)
+        click.echo(f"wrote {output} ({summary(graph)})", err=True)
     elif as_dot:
         click.echo(dot_text(graph))
     elif as_json:

@@ -84,13 +84,16 @@ def draw(graph: RosGraph, path: Path) -> None:
                 texts[name] = ax.text(x, y, name[2:], ha="center", va="center", zorder=2,
                                       bbox=STYLE[name[0]], gid=name)  # fmt: skip
             left += column_width + GAP_W
+        column_of = {name: i for i, column in enumerate(columns) for name in column}
         for source, target in links:
             a, b = texts[source], texts[target]
+            # neighbours get straight arrows; longer and backward ones bend, so they do not cross boxes
+            bend = 0.0 if column_of[target] - column_of[source] == 1 else 0.25
             ax.annotate(
                 "", xy=b.get_position(), xytext=a.get_position(), zorder=3,
                 arrowprops={"arrowstyle": "-|>", "color": "0.35", "shrinkA": 1, "shrinkB": 1,
                             "patchA": a.get_bbox_patch(), "patchB": b.get_bbox_patch(),
-                            "connectionstyle": "arc3,rad=0.0"},
+                            "connectionstyle": f"arc3,rad={bend}"},
             )  # fmt: skip
         try:
             fig.savefig(path, dpi=150)

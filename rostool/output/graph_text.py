@@ -6,6 +6,7 @@ DOT is written here as text (a dozen lines) so `--dot` needs no extra; feed it t
 from __future__ import annotations
 
 import json
+from collections.abc import Sized
 
 from rostool.output.graph_model import RosGraph, TopicEdges
 
@@ -49,11 +50,17 @@ def _to(graph: RosGraph, subscribers: list[str]) -> str:
     return " -> " + (", ".join(subscribers) or "(no subscribers)")
 
 
+def count(items: Sized, word: str) -> str:
+    return f"{len(items)} {word}{'' if len(items) == 1 else 's'}"
+
+
+def summary(graph: RosGraph) -> str:
+    text = f"{count(graph.nodes, 'node')}, {count(graph.topics, 'topic')}"
+    return text + (f", {count(graph.services, 'service')}" if graph.services else "")
+
+
 def plain_text(graph: RosGraph) -> str:
-    summary = f"{len(graph.nodes)} nodes, {len(graph.topics)} topics"
-    if graph.services:
-        summary += f", {len(graph.services)} services"
-    lines = [summary, *("  " * depth + text for depth, _kind, text in tree_lines(graph))]
+    lines = [summary(graph), *("  " * depth + text for depth, _kind, text in tree_lines(graph))]
     return "\n".join(lines)
 
 
@@ -63,7 +70,7 @@ def print_rich(graph: RosGraph) -> None:
     from rich.tree import Tree
 
     colors = {"pub": "green", "sub": "cyan", "srv": "magenta", "call": "magenta", "topic": "yellow"}
-    root = Tree(f"[bold]{len(graph.nodes)} nodes, {len(graph.topics)} topics[/bold]")
+    root = Tree(f"[bold]{escape(summary(graph))}[/bold]")
     branch = root
     for depth, kind, text in tree_lines(graph):
         if depth == 0:
