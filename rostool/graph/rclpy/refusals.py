@@ -2,9 +2,6 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from typing import Any
-
 from rostool.errors import RostoolError
 from rostool.graph.ros2.protocol import ros1_only
 
@@ -19,12 +16,6 @@ class NotYet:
 
     def kill(self, name: str) -> None:
         raise RostoolError("ROS 2 nodes cannot be killed remotely (there is no node API); stop the process")
-
-    def raw_publisher(self, topic: str, wire_type: Any, latch: bool = False) -> Any:
-        raise not_yet("bag play")
-
-    def record_source(self, warn: Callable[[str], None], include_hidden: bool = False) -> Any:
-        raise not_yet("bag record")
 
     def service_uri(self, name: str) -> str:
         raise ros1_only("service uri")
