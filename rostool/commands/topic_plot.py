@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import sys
-import threading
 import time
 from collections import deque
 from pathlib import Path
@@ -92,7 +91,6 @@ def plot(
         if as_csv:
             sys.stdout.write(csv_header() + "\n")
         started = time.monotonic()
-        wake = threading.Event()
         drawn = 0
         try:
             while duration is None or time.monotonic() - started < duration:
@@ -101,7 +99,7 @@ def plot(
                     if duration is None
                     else min(1.0 / rate, duration - (time.monotonic() - started))
                 )
-                wake.wait(max(wait, 0.0))
+                time.sleep(max(wait, 0.0))
                 if failures:
                     raise RostoolError(failures[0])
                 rows = []
