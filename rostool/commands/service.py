@@ -3,12 +3,14 @@ list, type, info, find and call in ros2 service's forms and output)."""
 
 from __future__ import annotations
 
+import time
 from typing import Any
 
 import click
 
 from rostool.commands._common import json_option, live_graph, print_json
 from rostool.commands.srv import interfaces_option
+from rostool.commands.topic import ignored_ros2_options
 from rostool.errors import RostoolError
 from rostool.graph.base import hidden_name
 
@@ -27,21 +29,36 @@ def service() -> None:
       rostool service call /sum_two_ints "{a: 7, b: 8}" --json
       rostool --ros2 service call /add_two_ints example_interfaces/srv/AddTwoInts "{a: 1, b: 2}"
       rostool --ros2 service info /add_two_ints
+      rostool --ros2 service echo /add_two_ints      # needs the service's introspection on
+
+    Flags and output follow the selected ROS version: rosservice's under ROS 1, ros2 service's under
+    ROS 2. --json works in both. ros2cli flags with no meaning here (--no-daemon, --spin-time,
+    -s/--use-sim-time) are accepted and ignored.
     """
+
+
+hidden_services_option = click.option(
+    "-a", "--include-hidden-services", "--all", "hidden", is_flag=True,
+    help="ROS 2: also hidden services (a name part starting with _).",
+)  # fmt: skip
+count_option = click.option(
+    "-c", "--count-services", "--count", "count", is_flag=True, help="Only the number of services."
+)
 
 
 @service.command("list")
 @click.argument("namespace", required=False)
 @click.option("-n", "--nodes", "with_nodes", is_flag=True, help="Also print the node providing each service.")
 @click.option("-t", "--show-types", is_flag=True, help="ROS 2: also print each service's type.")
-@click.option(
-    "-a", "--include-hidden-services", "hidden", is_flag=True, help="ROS 2: also list hidden services."
-)
+@hidden_services_option
+@count_option
 @json_option
+@ignored_ros2_options("no_daemon", "spin_time", "use_sim_time")
 @click.pass_context
 def list_services(
-    ctx: click.Context, namespace: str | None, with_nodes: bool, show_types: bool, hidden: bool, as_json: bool
-) -> None:
+    ctx: click.Context, namespace: str | None, with_nodes: bool, show_types: bool, hidden: bool, count: bool,
+    as_json: bool,
+) -> None:  # fmt: skip
     """List the services of the live graph (optionally only those under NAMESPACE).
 
     \b
@@ -59,6 +76,9 @@ def list_services(
         if namespace:
             prefix = graph.resolve(namespace).rstrip("/") + "/"
             found = [s for s in found if s[0] == prefix[:-1] or s[0].startswith(prefix)]
+    if count:
+        click.echo(str(len(found)))
+        return
     if as_json:
         print_json([{"name": n, **({} if t is None else {"type": t}), "nodes": ns} for n, t, ns in found])
         return
@@ -69,15 +89,23 @@ def list_services(
 
 @service.command("type")
 @click.argument("name", metavar="SERVICE")
+@ignored_ros2_options("no_daemon", "spin_time", "use_sim_time")
 @click.pass_context
 def type_(ctx: click.Context, name: str) -> None:
     """Print the type of a service (asked from the service itself).
 
     \b
-    Example:
+    Examples:
       rostool service type /sum_two_ints      # sum_two_numbers/SumTwoInts
+      rostool --ros2 service type /add_two_ints   # example_interfaces/srv/AddTwoInts
     """
     with live_graph(ctx) as graph:
+        if graph.style == "ros2":  # as ros2 service type: the announced type(s), or nothing and exit 1
+            types = sorted({t for n, t, _ in graph.services() if n == graph.resolve(name) and t})
+            if not types:
+                ctx.exit(1)
+            click.echo("\n".join(types))
+            return
         click.echo(graph.service_type(name))
 
 
@@ -212,17 +240,64 @@ def _qos_lines(qos: dict[str, Any], indent: str) -> list[str]:
 
 @service.command("find")
 @click.argument("type_name", metavar="TYPE")
+@hidden_services_option
+@count_option
+@ignored_ros2_options("no_daemon", "spin_time", "use_sim_time")
 @click.pass_context
-def find(ctx: click.Context, type_name: str) -> None:
+def find(ctx: click.Context, type_name: str, hidden: bool, count: bool) -> None:
     """List the services of type TYPE.
 
     \b
-    Example:
+    Examples:
       rostool service find std_srvs/Trigger
+      rostool --ros2 service find std_srvs/srv/SetBool -c
     """
     with live_graph(ctx) as graph:
-        for name in graph.find_services(type_name):
-            click.echo(name)
+        if graph.style == "ros1" and hidden:
+            raise RostoolError("service find -a applies to ROS 2 graphs only")
+        if graph.style == "ros2":
+            from rostool.interfaces.names import to_store_name
+
+            wanted = {type_name, to_store_name(type_name, "srv")}
+            names = sorted(
+                n for n, t, _ in graph.services() if t in wanted and (hidden or not hidden_name(n))
+            )
+        else:
+            names = graph.find_services(type_name)
+    click.echo(str(len(names)) if count else "\n".join(names), nl=count or bool(names))
+
+
+@service.command("echo")
+@click.argument("name", metavar="SERVICE")
+@click.option("-n", "count", type=click.IntRange(min=1), help="Stop after N events.")
+@click.option("--once", is_flag=True, help="Stop after one event.")
+@click.option("--timeout", type=click.FloatRange(min=0, min_open=True), help="Give up after S seconds idle.")
+@click.option("--csv", "as_csv", is_flag=True, help="Each event as a CSV row.")
+@click.option("--no-arr", "noarr", is_flag=True, help="Show arrays as their type and length.")
+@click.option("--no-str", "nostr", is_flag=True, help="Show strings as their length.")
+@click.option("-l", "--truncate-length", type=click.IntRange(min=0), help="Cut strings and arrays after N.")
+@click.option("-f", "--full-length", is_flag=True, help="Never truncate.")
+@click.option("--flow-style", is_flag=True, help="YAML in flow style.")
+@interfaces_option
+@json_option
+@ignored_ros2_options("no_daemon", "spin_time", "use_sim_time")
+@click.pass_context
+def echo(ctx: click.Context, name: str, **options: Any) -> None:
+    """ROS 2: print the introspection events of a service (its SERVICE/_service_event topic), as ros2
+    service echo does: REQUEST_SENT, REQUEST_RECEIVED, RESPONSE_SENT, RESPONSE_RECEIVED. The service and
+    its clients must have introspection on (configure_introspection), else nothing is published.
+
+    \b
+    Examples:
+      rostool --ros2 service echo /add_two_ints
+      rostool --ros2 service echo /add_two_ints --no-arr --once
+    """
+    from rostool.commands.topic import echo as topic_echo
+
+    if ctx.find_root().obj is not None and getattr(ctx.find_root().obj, "ros_version", None) == 1:
+        raise RostoolError("service echo applies to ROS 2 graphs (ROS 1 services have no event topic)")
+    event_topic = name.rstrip("/") + "/_service_event"
+    ctx.invoke(topic_echo, name=event_topic, **options)
 
 
 @service.command("call", context_settings={"ignore_unknown_options": True})  # negative numbers are values
@@ -234,8 +309,11 @@ def find(ctx: click.Context, type_name: str) -> None:
     type=click.FloatRange(min=0, min_open=True),
     help="Give up after S seconds (waiting, connecting and the call itself).",
 )
+@click.option("-r", "--rate", type=click.FloatRange(min=0, min_open=True), metavar="HZ",
+              help="ROS 2: call again at HZ until Ctrl+C (as ros2 service call -r).")  # fmt: skip
 @interfaces_option
 @json_option
+@ignored_ros2_options("no_daemon", "spin_time", "use_sim_time")
 @click.pass_context
 def call(
     ctx: click.Context,
@@ -243,6 +321,7 @@ def call(
     values: tuple[str, ...],
     wait: bool,
     timeout: float | None,
+    rate: float | None,
     interface_paths: tuple[str, ...],
     as_json: bool,
 ) -> None:
@@ -260,32 +339,51 @@ def call(
       rostool service call /reset
       rostool --ros2 service call /add_two_ints example_interfaces/srv/AddTwoInts "{a: 1, b: 2}"
       rostool --ros2 service call /add_two_ints "{a: 1, b: 2}" --json
-      rostool --ros2 service call /rate robo_msgs/srv/Rate "{factor: 2}" --interfaces ~/ros2_ws
+      rostool --ros2 service call -r 1 /add_two_ints example_interfaces/srv/AddTwoInts "{a: 1, b: 2}"
     """
     from rostool.output.plain import to_plain
     from rostool.output.yaml_text import to_yaml
 
     with live_graph(ctx, interface_paths) as graph:
-        request, response = graph.service_call(name, values, wait, timeout)
-        style = graph.style
-    if as_json:
-        print_json(to_plain(response, style))
-    elif style == "ros1":
-        click.echo(to_yaml(response))
-    else:
-        click.echo(f"requester: making request: {message_repr(request)}\n")
-        click.echo(f"response:\n{message_repr(response)}\n")
+        if rate is not None and graph.style == "ros1":
+            raise RostoolError("service call -r applies to ROS 2 graphs only (ros2 service call's form)")
+        lookup = _field_lookup(graph)
+        while True:
+            started = time.monotonic()
+            request, response = graph.service_call(name, values, wait, timeout)
+            if as_json:
+                print_json(to_plain(response, graph.style))
+            elif graph.style == "ros1":
+                click.echo(to_yaml(response))
+            else:
+                click.echo(f"requester: making request: {message_repr(request, lookup)}\n")
+                click.echo(f"response:\n{message_repr(response, lookup)}\n", nl=True)
+            if rate is None:
+                return
+            time.sleep(max(0.0, 1.0 / rate - (time.monotonic() - started)))
 
 
-def message_repr(value: Any) -> str:
-    """A message as rclpy's repr shows it: `pkg.srv.Name_Request(a=1, b=2)`."""
+def _field_lookup(graph: Any) -> Any:
+    from rostool.output.ros2_echo import fielddefs_lookup
+
+    return fielddefs_lookup(getattr(getattr(graph.types, "store", None), "fielddefs", {}))
+
+
+def message_repr(value: Any, lookup: Any = None, desc: Any = None) -> str:
+    """A message as rclpy's repr shows it: `pkg.srv.Name_Request(a=1, b=2)`; with the type store's field
+    lookup, `byte` fields print as bytes (b'\\x00') as rclpy's do."""
     from rostool.output.plain import is_message, message_fields
 
     if is_message(value):
-        fields = ", ".join(f"{k}={message_repr(v)}" for k, v in message_fields(value))
-        return f"{getattr(value, '__msgtype__', type(value).__name__).replace('/', '.')}({fields})"
+        msgtype = getattr(value, "__msgtype__", type(value).__name__)
+        descs = (lookup(msgtype) if lookup else None) or {}
+        fields = ", ".join(f"{k}={message_repr(v, lookup, descs.get(k))}" for k, v in message_fields(value))
+        return f"{msgtype.replace('/', '.')}({fields})"
     if hasattr(value, "tolist"):
         value = value.tolist()
     if isinstance(value, (list, tuple)):
-        return "[" + ", ".join(message_repr(v) for v in value) + "]"
+        element = desc[1][0] if desc is not None and desc[0] in (3, 4) else None  # array, sequence
+        return "[" + ", ".join(message_repr(v, lookup, element) for v in value) + "]"
+    if isinstance(value, int) and desc is not None and desc[0] == 1 and desc[1][0] == "byte":
+        return repr(bytes([value]))
     return repr(value)
