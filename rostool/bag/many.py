@@ -51,6 +51,8 @@ def expand(paths: Sequence[str | Path]) -> list[BagItem]:
     found: list[tuple[Path, str]] = []
     for given in paths:
         path = Path(given)
+        if not path.exists():
+            raise RostoolError(f"{path}: no such file or directory")
         if path.is_dir() and not is_one_bag(path):
             inside = sorted(_walk(path))
             if not inside:
@@ -84,6 +86,18 @@ def _name(relative: Path) -> str:
     return re.sub(r"[^A-Za-z0-9_.-]", "_", str(stem).replace("/", "__")) or "bag"
 
 
+PARALLEL_FROM_BYTES = 64 * 1024 * 1024
+
+
+def _size(path: Path) -> int:
+    try:
+        if path.is_dir():
+            return sum(entry.stat().st_size for entry in path.rglob("*") if entry.is_file())
+        return path.stat().st_size
+    except OSError:
+        return 0
+
+
 def default_jobs() -> int:
     return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
 
@@ -113,7 +127,8 @@ def run(
 ) -> Iterator[tuple[BagItem, T | Failure]]:
     """(item, func(item) or its Failure) for every bag, in the order of `items`. `func` must be a module-level
     function (it runs in worker processes when jobs > 1)."""
-    jobs = default_jobs() if jobs is None else jobs
+    if jobs is None:  # starting worker processes costs ~0.5 s: worth it only for enough data
+        jobs = default_jobs() if sum(_size(item.path) for item in items) >= PARALLEL_FROM_BYTES else 1
     with _Progress(len(items), label) as progress:
         if jobs <= 1 or len(items) <= 1:
             for item in items:
@@ -125,6 +140,8 @@ def run(
         from concurrent.futures import ProcessPoolExecutor
 
         context = multiprocessing.get_context("forkserver")
+        module = getattr(getattr(func, "func", func), "__module__", __name__)  # func may be a partial
+        context.set_forkserver_preload(["rostool.bag.reader", module])
         pool = ProcessPoolExecutor(min(jobs, len(items)), mp_context=context, initializer=_ignore_sigint)
         try:
             futures = [pool.submit(_call, func, item) for item in items]
@@ -133,8 +150,9 @@ def run(
             for item, future in zip(items, futures, strict=True):
                 yield item, future.result()
         except BaseException:
+            processes = list((getattr(pool, "_processes", None) or {}).values())
             pool.shutdown(wait=False, cancel_futures=True)
-            for process in list(getattr(pool, "_processes", {}).values()):
+            for process in processes:
                 process.terminate()
             raise
         pool.shutdown()
@@ -176,20 +194,29 @@ class _Progress:
 
 
 def successes(
-    func: Callable[[BagItem], T], items: Sequence[BagItem], jobs: int | None, label: str = "bags"
+    func: Callable[[BagItem], T],
+    items: Sequence[BagItem],
+    jobs: int | None,
+    label: str = "bags",
+    keep_going: bool = False,
 ) -> Iterator[tuple[BagItem, T]]:
-    """`run`, keeping what succeeded. One bag: its failure is the command's error. Several: each failure
-    is one line on stderr as it comes, the others go on, and a last line ends with a non-zero exit."""
+    """`run`, keeping what succeeded. The first failure (in the bags' order) is the command's one-line
+    error and ends the other workers; with `keep_going` each failure is one line on stderr as it comes,
+    the other bags go on, and a last line ends the command with a non-zero exit."""
     failed = 0
-    for item, result in run(func, items, jobs, label):
-        if not isinstance(result, Failure):
-            yield item, result
-        elif len(items) == 1:
-            raise RostoolError(result.message, result.exit_code)
-        else:
-            import click
+    results = run(func, items, jobs, label)
+    try:
+        for item, result in results:
+            if not isinstance(result, Failure):
+                yield item, result
+            elif not keep_going or len(items) == 1:
+                raise RostoolError(result.message, result.exit_code)
+            else:
+                import click
 
-            failed += 1
-            click.echo(f"rostool: {result.message}", err=True)
+                failed += 1
+                click.echo(f"rostool: warning: skipped {item.path}: {result.message}", err=True)
+    finally:
+        results.close()
     if failed:
-        raise RostoolError(f"{failed} of {len(items)} bags failed (see the lines above)")
+        raise RostoolError(f"{failed} of {len(items)} bags failed (see the warnings above)")

@@ -6,12 +6,15 @@ with `@bag.command()` like the ones below.
 
 from __future__ import annotations
 
+import os
 import sys
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import click
 
+from rostool.bag.many import BagItem
 from rostool.bag.typestores import DEFAULT_DISTRO, DISTROS
 from rostool.commands._common import ExtensibleGroup, interfaces_option
 from rostool.commands._qos import qos_options
@@ -77,20 +80,29 @@ def _topic_list(values: Sequence[str]) -> list[str]:
 @click.option("--json", "as_json", is_flag=True, help="One JSON object (a list for several bags).")
 @click.option("--yaml", "as_yaml", is_flag=True, help="YAML with `rosbag info --yaml`'s keys.")
 @click.option("--freq", is_flag=True, help="Also show each topic's rate (reads message timestamps).")
-def info(bags: tuple[str, ...], as_json: bool, as_yaml: bool, freq: bool) -> None:
+@jobs_option
+def info(bags: tuple[str, ...], as_json: bool, as_yaml: bool, freq: bool, jobs: int | None) -> None:
     """Summarize bags from their index: duration, size, counts, types and topics.
+
+    Several bags, or a directory of bags (searched recursively; a rosbag2 directory is one bag), are
+    read in parallel processes and printed in order.
 
     \b
     Examples:
       rostool bag info run.bag
       rostool bag info rosbag2_dir/ --json | jq '.topics[] | select(.count > 0) | .name'
       rostool bag info a.bag b.mcap --yaml
+      rostool bag info fleet/ -j 2 --json
     """
-    from rostool.bag.info import bag_info, format_text, to_rosbag_yaml
+    from functools import partial
+
+    from rostool.bag.info import format_text, to_rosbag_yaml
+    from rostool.bag.many import expand, successes
 
     if as_json and as_yaml:
         raise RostoolError("choose one of --json and --yaml")
-    infos = [bag_info(path, freq=freq) for path in bags]
+    items = expand(bags)
+    infos = [value for _item, value in successes(partial(_info_one, freq), items, jobs, "reading")]
     if as_json:
         from rostool.output.json_text import dumps
 
@@ -104,11 +116,16 @@ def info(bags: tuple[str, ...], as_json: bool, as_yaml: bool, freq: bool) -> Non
         click.echo("\n\n".join(format_text(i) for i in infos))
 
 
+def _info_one(freq: bool, item: BagItem) -> Any:
+    from rostool.bag.info import bag_info
+
+    return bag_info(item.path, freq=freq)
+
+
 # -- echo ----------------------------------------------------------------------------------------
 @bag.command(context_settings=CONTEXT)
-@click.argument("bag_path", metavar="BAG")
-@click.argument("topics", nargs=-1, metavar="[TOPIC]...")
-@click.option("-n", "count", type=click.IntRange(min=1), help="Stop after N messages.")
+@click.argument("args", nargs=-1, required=True, metavar="BAG... [TOPIC]...")
+@click.option("-n", "count", type=click.IntRange(min=1), help="Stop after N messages (of each bag).")
 @click.option("--json", "as_json", is_flag=True, help="One JSON object per line.")
 @click.option("--csv", "as_csv", is_flag=True, help="CSV like `rostopic echo -p` (one topic).")
 @click.option("--field", "fields", multiple=True, metavar="F", help="Print only this field (repeatable).")
@@ -117,10 +134,10 @@ def info(bags: tuple[str, ...], as_json: bool, as_yaml: bool, freq: bool) -> Non
 @click.option("--filter", "expr", metavar="EXPR", help="Keep messages where EXPR holds (names: m, topic, t).")
 @click.option("--start", metavar="S", help=f"First message time: {TIME_HELP}.")
 @click.option("--end", metavar="S", help=f"Last message time: {TIME_HELP}.")
+@jobs_option
 @distro_option
 def echo(
-    bag_path: str,
-    topics: tuple[str, ...],
+    args: tuple[str, ...],
     count: int | None,
     as_json: bool,
     as_csv: bool,
@@ -130,6 +147,7 @@ def echo(
     expr: str | None,
     start: str | None,
     end: str | None,
+    jobs: int | None,
     distro: str,
 ) -> None:
     """Print the messages of a bag, as `rostopic echo -b` (ROS 1) or `ros2 topic echo` (ROS 2) would.
@@ -139,46 +157,127 @@ def echo(
     `# TOPIC @ SECONDS` (grep -A for it); with --json each line is then
     {"topic": ..., "t": seconds, "msg": {...}} instead of the bare message.
 
+    Several bags (the leading arguments that exist as paths), or a directory of bags, are read in
+    parallel processes and printed one after the other in order: YAML output starts each bag with a
+    `# bag: PATH` line, and each JSON line is {"bag": NAME, "topic": ..., "t": ..., "msg": {...}}.
+
     \b
     Examples:
       rostool bag echo run.bag /turtle1/pose -n 2
       rostool bag echo run.bag /turtle1/pose --field x --csv
       rostool bag echo rosbag2_dir /chatter --json --filter 'm.data.startswith("hello")'
       rostool bag echo run.bag --filter 'topic == "/rosout" and m.level >= 4'
+      rostool bag echo fleet/ /odom --json -j 2 | jq .msg.pose.pose.position.x
     """
-    from rostool.bag.convert import parse_time
-    from rostool.bag.reader import BagReader
-    from rostool.output.echo import EchoRenderer
+    from rostool.bag.many import expand
 
     if as_json and as_csv:
         raise RostoolError("choose one of --json and --csv")
-    with BagReader([bag_path], distro) as reader:
-        conns = reader.select(topics)
+    paths, topics = _bags_then_topics(args)
+    items = expand(paths)
+    mode = "json" if as_json else "csv" if as_csv else "yaml"
+    settings = EchoSettings(topics, count, mode, fields, noarr, nostr, expr, start, end, distro)
+    if len(items) == 1:
+        _echo_bag(items[0].path, settings, sys.stdout.write, None)
+        sys.stdout.flush()
+        return
+    if as_csv:
+        raise RostoolError("--csv prints one bag: for several, use `rostool bag export --format csv`")
+    _echo_many(items, settings, jobs)
+
+
+@dataclass(frozen=True)
+class EchoSettings:
+    topics: tuple[str, ...]
+    count: int | None
+    mode: Any
+    fields: tuple[str, ...]
+    noarr: bool
+    nostr: bool
+    expr: str | None
+    start: str | None
+    end: str | None
+    distro: str
+
+
+def _bags_then_topics(args: Sequence[str]) -> tuple[list[str], tuple[str, ...]]:
+    """The leading arguments that exist as paths are bags (at least the first), the rest topics."""
+    from pathlib import Path
+
+    count = 1
+    while count < len(args) and Path(args[count]).exists():
+        count += 1
+    return list(args[:count]), tuple(args[count:])
+
+
+def _echo_bag(path: Any, settings: EchoSettings, write: Callable[[str], Any], bag_name: str | None) -> None:
+    """Print one bag; `bag_name` is set when it is one of several (JSON lines then name it)."""
+    from rostool.bag.convert import parse_time
+    from rostool.bag.reader import BagReader
+    from rostool.output.echo import EchoRenderer
+    from rostool.output.json_text import dumps
+
+    with BagReader([path], settings.distro) as reader:
+        if bag_name is not None and settings.topics:  # a fleet: a topic some bags lack is not an error
+            conns = reader.select([name for name in settings.topics if name in reader.topics])
+            conns = conns if any(name in reader.topics for name in settings.topics) else []
+        else:
+            conns = reader.select(settings.topics)
         names = sorted({c.topic for c in conns})
-        several = len(names) > 1
-        if as_csv and several and not fields:
+        several = len(names) > 1 or bag_name is not None
+        if settings.mode == "csv" and several and not settings.fields:
             raise RostoolError("--csv prints one topic: name it (e.g. `rostool bag echo BAG /topic --csv`)")
         render = EchoRenderer(
-            "json" if as_json else "csv" if as_csv else "yaml",
-            fields,
-            noarr,
-            nostr,
+            settings.mode,
+            settings.fields,
+            settings.noarr,
+            settings.nostr,
             style="ros1" if reader.ros_version == 1 else "ros2",
             several=several,
         )
-        keep = _echo_filter(expr)
-        first, last = parse_time(start, reader.start_ns, "start"), parse_time(end, reader.start_ns, "end")
+        prefix = ""
+        if bag_name is not None:
+            if settings.mode == "json":
+                prefix = '{"bag": ' + dumps(bag_name) + ", "
+            else:
+                write(f"# bag: {path}\n")
+        keep = _echo_filter(settings.expr)
+        first = parse_time(settings.start, reader.start_ns, "start")
+        last = parse_time(settings.end, reader.start_ns, "end")
         printed = 0
-        write = sys.stdout.write
         for conn, timestamp, data in reader.messages(conns, first, last) if conns else ():
             msg = reader.deserialize(data, conn)
             if keep is not None and not keep(msg, conn.topic, timestamp):
                 continue
-            write(render.render(msg, timestamp, conn.topic) + "\n")
+            text = render.render(msg, timestamp, conn.topic)
+            write((prefix + text[1:] if prefix else text) + "\n")
             printed += 1
-            if count is not None and printed >= count:
+            if settings.count is not None and printed >= settings.count:
                 break
+
+
+def _echo_many(items: Sequence[BagItem], settings: EchoSettings, jobs: int | None) -> None:
+    """Each bag is printed into a file by a worker; the files are copied to stdout in the bags' order."""
+    import shutil
+    import tempfile
+    from functools import partial
+
+    from rostool.bag.many import successes
+
+    with tempfile.TemporaryDirectory(prefix="rostool-echo-") as folder:
+        work = partial(_echo_to_file, settings, folder)
+        for _item, text_path in successes(work, items, jobs, "reading"):
+            with open(text_path, encoding="utf-8") as handle:
+                shutil.copyfileobj(handle, sys.stdout)
+            os.unlink(text_path)
         sys.stdout.flush()
+
+
+def _echo_to_file(settings: EchoSettings, folder: str, item: BagItem) -> str:
+    path = os.path.join(folder, f"{item.name}.txt")
+    with open(path, "w", encoding="utf-8") as handle:
+        _echo_bag(item.path, settings, handle.write, item.name)
+    return path
 
 
 def _echo_filter(expr: str | None) -> Callable[[object, str, int], bool] | None:
@@ -214,6 +313,7 @@ FORMAT_OPTION = click.option(
 @click.option("--end", metavar="S", help=f"Drop messages after: {TIME_HELP}.")
 @distro_option
 @click.option("--force", is_flag=True, help="Overwrite DST if it exists.")
+@jobs_option
 def convert(
     paths: tuple[str, ...],
     fmt: Any,
@@ -223,6 +323,7 @@ def convert(
     end: str | None,
     distro: str,
     force: bool,
+    jobs: int | None,
 ) -> None:
     """Convert bags between ROS 1 .bag, .mcap, .db3 and rosbag2 directories.
 
@@ -230,25 +331,32 @@ def convert(
     else a rosbag2 directory (mcap storage unless --format db3). Message types and bytes are converted
     between ROS 1 and ROS 2 (tf/tfMessage becomes tf2_msgs/msg/TFMessage; other types keep their name
     and carry their definition). DST is written under a temporary name and appears only when complete.
+    Several SRC bags are merged into DST; a SRC that is a directory of bags converts each bag on its
+    own, in parallel processes, into DST/NAME.FORMAT (a rosbag2 directory DST/NAME without --format).
 
     \b
     Examples:
       rostool bag convert run.bag run.mcap
       rostool bag convert rosbag2_dir/ run.bag --topics /tf,/odom
       rostool bag convert part1.bag part2.bag merged --format db3 --start +10 --end +20
+      rostool bag convert fleet/ fleet_mcap/ --format mcap -j 2
     """
     from rostool.bag.convert import Selection, copy_bags
 
     if len(paths) < 2:
         raise RostoolError("give at least one SRC and a DST (e.g. `rostool bag convert in.bag out.mcap`)")
     selection = Selection(_topic_list(topics), _topic_list(exclude_topics), start, end)
-    result = copy_bags(paths[:-1], paths[-1], fmt, selection, distro=distro, force=force)
+    sources = paths[:-1]
+    if _is_fleet(sources):
+        job = _CopyJob(paths[-1], fmt, selection, None, distro, force, like_input=False)
+        _copy_each(job, sources, jobs)
+        return
+    result = copy_bags(sources, paths[-1], fmt, selection, distro=distro, force=force)
     _report(result.written, len(result.topics), paths[-1])
 
 
 @bag.command(name="filter", context_settings=CONTEXT)
-@click.argument("src", metavar="IN")
-@click.argument("dst", metavar="OUT")
+@click.argument("paths", nargs=-1, required=True, metavar="IN... OUT")
 @click.option(
     "--topics", multiple=True, metavar="T", help="Only these topics (repeatable, or comma-separated)."
 )
@@ -258,9 +366,9 @@ def convert(
 @FORMAT_OPTION
 @distro_option
 @click.option("--force", is_flag=True, help="Overwrite OUT if it exists.")
+@jobs_option
 def filter_(
-    src: str,
-    dst: str,
+    paths: tuple[str, ...],
     topics: tuple[str, ...],
     start: str | None,
     end: str | None,
@@ -268,24 +376,89 @@ def filter_(
     fmt: Any,
     distro: str,
     force: bool,
+    jobs: int | None,
 ) -> None:
     """Copy the messages that match into a new bag (same format as IN unless OUT's name says otherwise).
 
     EXPR is a safe Python-like expression over the message `m`, its `topic` and its time `t` (seconds):
     field access, indexing, literals, comparisons, and/or/not, len/abs/min/max, string methods.
+    Several INs, or a directory of bags, are filtered each on its own, in parallel processes, into the
+    folder OUT (OUT/NAME, in the format of each IN unless --format says otherwise).
 
     \b
     Examples:
       rostool bag filter run.bag fast.bag --filter 'm.linear.x > 1.0' --topics /turtle1/cmd_vel
       rostool bag filter run.bag late.bag --filter 't > 1396293900'
       rostool bag filter rosbag2_dir out --filter 'topic != "/rosout"'
+      rostool bag filter fleet/ fleet_no_rosout/ --filter 'topic != "/rosout"' -j 2
     """
     from rostool.bag.convert import Selection, copy_bags
 
-    keep = _echo_filter(expr)
-    selection = Selection(_topic_list(topics), (), start, end, keep)
-    result = copy_bags([src], dst, fmt, selection, distro=distro, force=force, like_input=True)
+    if len(paths) < 2:
+        raise RostoolError("give IN and OUT (e.g. `rostool bag filter in.bag out.bag --topics /odom`)")
+    sources, dst = paths[:-1], paths[-1]
+    selection = Selection(_topic_list(topics), (), start, end)
+    if len(sources) > 1 or _is_fleet(sources):
+        _copy_each(_CopyJob(dst, fmt, selection, expr, distro, force, like_input=True), sources, jobs)
+        return
+    selection.predicate = _echo_filter(expr)
+    result = copy_bags(sources, dst, fmt, selection, distro=distro, force=force, like_input=True)
     _report(result.written, len(result.topics), dst)
+
+
+def _is_fleet(sources: Sequence[str]) -> bool:
+    """A SRC that is a directory of bags (not itself a bag)."""
+    from pathlib import Path
+
+    from rostool.bag.many import is_one_bag
+
+    return any(Path(src).is_dir() and not is_one_bag(Path(src)) for src in sources)
+
+
+@dataclass(frozen=True)
+class _CopyJob:
+    """What convert/filter do to each bag of several (plain data: it goes to worker processes)."""
+
+    out: str
+    fmt: Any
+    selection: Any
+    expr: str | None
+    distro: str
+    force: bool
+    like_input: bool
+
+
+def _copy_each(job: _CopyJob, sources: Sequence[str], jobs: int | None) -> None:
+    from functools import partial
+    from pathlib import Path
+
+    from rostool.bag.many import expand, successes
+
+    items = expand(sources)
+    try:
+        Path(job.out).mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise RostoolError(f"{job.out}: cannot create the output folder: {err.strerror or err}") from err
+    for _item, (written, topics, dst) in successes(partial(_copy_one, job), items, jobs, "copying"):
+        _report(written, topics, dst)
+
+
+def _copy_one(job: _CopyJob, item: BagItem) -> tuple[int, int, str]:
+    import dataclasses
+    from pathlib import Path
+
+    from rostool.bag.convert import copy_bags
+
+    suffix = {"bag": ".bag", "mcap": ".mcap", "db3": ".db3"}.get(job.fmt or "", "")
+    if job.fmt is None and job.like_input and item.path.is_file():
+        suffix = item.path.suffix
+    dst = str(Path(job.out) / f"{item.name}{suffix}")
+    selection = dataclasses.replace(job.selection, predicate=_echo_filter(job.expr))
+    result = copy_bags(
+        [item.path], dst, job.fmt, selection, distro=job.distro, force=job.force, progress=False,
+        like_input=job.like_input,
+    )  # fmt: skip
+    return result.written, len(result.topics), dst
 
 
 def _report(written: int, topics: int, dst: str) -> None:

@@ -28,6 +28,7 @@ from rostool.errors import RostoolError
 @click.option("--images", type=click.Path(file_okay=False), metavar="DIR",
               help="Write sensor_msgs Image/CompressedImage messages as PNG files here.")  # fmt: skip
 @click.option("--video", is_flag=True, help="With --images: one MP4 (H.264) per image topic instead of PNGs.")
+@click.option("--keep-going", is_flag=True, help="Several bags: skip the ones that fail (a warning each).")
 @jobs_option
 @distro_option
 def export(
@@ -37,6 +38,7 @@ def export(
     topics: tuple[str, ...],
     images: str | None,
     video: bool,
+    keep_going: bool,
     jobs: int | None,
     distro: str,
 ) -> None:
@@ -82,7 +84,9 @@ def export(
     several = len(items) > 1
     total = ExportResult("")
     exported = 0
-    for _item, result in successes(partial(_export_one, options, several), items, jobs, "exporting"):
+    for _item, result in successes(
+        partial(_export_one, options, several), items, jobs, "exporting", keep_going
+    ):
         exported += 1
         total.messages += result.messages
         total.images += result.images
