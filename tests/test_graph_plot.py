@@ -99,6 +99,8 @@ def test_graph_of_a_real_ros1_graph(debian_master: dict[str, str], tmp_path: Pat
             "clients": [],
         } in every
         assert json.loads(rostool(["graph", "--ns", "/nowhere", "--json"], env).stdout)["nodes"] == []
+        code, tree = run_in_terminal(["graph"], env)  # a terminal gets rich's tree
+        assert code == 0 and "└── " in tree and "pub /chatter [std_msgs/String] -> /listener" in tree, tree
         png = rostool(["graph", "-o", str(tmp_path / "graph.png")], env)
         assert png.returncode == 0 and (tmp_path / "graph.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     finally:

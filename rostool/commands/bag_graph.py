@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from rostool.commands.graph import CONTEXT, output_option, render
+from rostool.commands.graph import CONTEXT, check_options, output_option, render
 
 
 @click.command(context_settings=CONTEXT)
@@ -27,6 +27,7 @@ def graph(bags: tuple[str, ...], as_dot: bool, as_json: bool, output: Path | Non
     from rostool.bag.reader import BagReader
     from rostool.output.graph_model import from_bag
 
+    check_options(as_dot, as_json, output)
     with BagReader(list(bags)) as reader:
         found = from_bag(reader)
     render(found, as_dot, as_json, output)

@@ -21,14 +21,21 @@ def output_option(func: click.decorators.FC) -> click.decorators.FC:
     )(func)  # fmt: skip
 
 
+def check_options(as_dot: bool, as_json: bool, output: Path | None) -> None:
+    """Refuse what cannot be written before the graph or bag is read."""
+    if as_dot and as_json:
+        raise RostoolError("choose one of --dot and --json")
+    if output is not None and output.suffix.lower() not in (*DRAWN, ".dot", ".gv", ".json"):
+        raise RostoolError(f"{output}: unknown format; name the file .svg, .png, .pdf, .dot or .json")
+
+
 def render(graph: object, as_dot: bool, as_json: bool, output: Path | None) -> None:
     """One graph to the chosen output: a file, DOT, JSON, or the text tree (rich on a terminal)."""
     from rostool.output.graph_model import RosGraph
     from rostool.output.graph_text import dot_text, plain_text, print_rich, summary
 
     assert isinstance(graph, RosGraph)
-    if as_dot and as_json:
-        raise RostoolError("choose one of --dot and --json")
+    check_options(as_dot, as_json, output)
     if output is not None:
         suffix = output.suffix.lower()
         if suffix in DRAWN:
@@ -88,6 +95,7 @@ def graph(
     """
     from rostool.output.graph_model import collect
 
+    check_options(as_dot, as_json, output)
     with live_graph(ctx) as live:
         found = collect(live, services=services, show_all=show_all, ns=ns)
     render(found, as_dot, as_json, output)
