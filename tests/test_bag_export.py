@@ -278,3 +278,21 @@ def test_parquet_image_table_keeps_the_bytes(tmp_path: Path) -> None:
     assert table.schema.field("data").type == pa.binary()
     assert table.column("encoding").to_pylist() == ["rgb8", "bgr8", "mono8", "mono16", "rgba8"]
     assert table.column("data")[0].as_py() == pixels["rgb8"].tobytes()
+
+
+def test_a_missing_extra_is_one_line(tmp_path: Path) -> None:
+    """Without pyarrow (here: a pyarrow that fails to import, first on the path) Parquet names the extra;
+    CSV needs no extra."""
+    fake = tmp_path / "site" / "pyarrow"
+    fake.mkdir(parents=True)
+    (fake / "__init__.py").write_text("raise ImportError('no pyarrow here')\n")
+    without = {**env(), "PYTHONPATH": str(tmp_path / "site")}
+    path = str(shared("ros2/talker_mcap"))
+    result = rostool(["bag", "export", path, "-o", str(tmp_path / "out")], without)
+    assert result.returncode == 1
+    assert result.stderr == (
+        "rostool: --format parquet needs the pyarrow module: pip install 'rostool[export]'\n"
+    )
+    csv_out = rostool(["bag", "export", path, "--format", "csv", "-o", str(tmp_path / "csv")], without)
+    assert csv_out.returncode == 0, csv_out.stderr
+    assert (tmp_path / "csv" / "topic.csv").read_text().splitlines()[1].endswith(',"Hello, world! 0"')

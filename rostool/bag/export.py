@@ -47,20 +47,21 @@ class ExportResult:
 
 
 def require_extras(options: ExportOptions) -> None:
-    """One line naming the extra when a module the chosen outputs need is missing."""
-    from importlib.util import find_spec
+    """One line naming the extra when a module the chosen outputs need does not import."""
+    import importlib
 
     needs = []
     if options.fmt == "parquet":
         needs.append(("pyarrow", "--format parquet"))
     if options.images is not None:
-        needs.append(("PIL", "--images"))
-        needs.append(("numpy", "--images"))
+        needs += [("numpy", "--images"), ("PIL", "--images")]
     if options.video:
         needs.append(("av", "--video"))
     for module, what in needs:
-        if find_spec(module) is None:
-            raise RostoolError(f"{what} needs the {module} module: {EXTRA_HINT}")
+        try:
+            importlib.import_module(module)
+        except ImportError as err:
+            raise RostoolError(f"{what} needs the {module} module: {EXTRA_HINT}") from err
 
 
 def topic_file(topic: str) -> str:
