@@ -141,6 +141,7 @@ def test_send_goal_feedback_and_result(fibonacci: tuple[subprocess.Popen[str], d
     assert text.returncode == 0, text.stderr
     goal_id = server.stdout.readline().split()[1]
     assert text.stdout == (
+        "Waiting for an action server to become available...\n"  # ros2 prints it first, always
         f"Sending goal:\n     order: 3\n\nGoal accepted with ID: {goal_id}\n\n"
         "Feedback:\n    sequence:\n- 0\n- 1\n- 1\n\n"
         "Feedback:\n    sequence:\n- 0\n- 1\n- 1\n- 2\n\n"
@@ -163,7 +164,7 @@ def test_list_info(fibonacci: tuple[subprocess.Popen[str], dict[str, str]]) -> N
     assert listed.stdout == "/fibonacci [example_interfaces/action/Fibonacci]\n", listed.stderr
     info = rostool(["action", "info", "/fibonacci"], env)
     assert info.stdout.splitlines() == [
-        "Action: /fibonacci", "Type: example_interfaces/action/Fibonacci", "Action clients: 0",
+        "Action: /fibonacci", "Action clients: 0",
         "Action servers: 1", "    /fibonacci_server",
     ], info.stderr  # fmt: skip
     assert json.loads(rostool(["action", "info", "/fibonacci", "--json"], env).stdout)["servers"] == [
@@ -173,8 +174,10 @@ def test_list_info(fibonacci: tuple[subprocess.Popen[str], dict[str, str]]) -> N
     assert rostool(["service", "list"], env).stdout == ""
     hidden = rostool(["service", "list", "-a"], env).stdout.splitlines()
     assert "/fibonacci/_action/send_goal" in hidden and len(hidden) == 3
-    missing = rostool(["action", "info", "/nope"], env)
-    assert missing.returncode == 1 and "unknown action /nope" in missing.stderr
+    missing = rostool(["action", "info", "/nope"], env)  # as ros2 action info: nobody serves or uses it
+    assert (
+        missing.returncode == 0 and missing.stdout == "Action: /nope\nAction clients: 0\nAction servers: 0\n"
+    )
 
 
 def test_ctrl_c_cancels_the_goal_on_the_server() -> None:

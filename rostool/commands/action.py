@@ -11,6 +11,7 @@ import click
 
 from rostool.commands._common import json_option, live_graph, print_json
 from rostool.commands.srv import interfaces_option
+from rostool.commands.topic import ignored_ros2_options
 from rostool.errors import RostoolError
 
 _TYPE_NAME = re.compile(r"[A-Za-z][\w]*/(action/)?[A-Za-z]\w*\Z")
@@ -32,14 +33,33 @@ def action() -> None:
       rostool action cancel /navigate_2d_action
       rostool --ros2 action send-goal /fibonacci example_interfaces/action/Fibonacci "{order: 5}" --feedback
       rostool --ros2 action cancel /fibonacci
+      rostool --ros2 action send_goal -f /fibonacci test_msgs/action/Fibonacci "{order: 5}"
+
+    Flags and output follow the selected ROS version: actionlib's tools' under ROS 1, ros2 action's under
+    ROS 2 (send_goal is send-goal). --json works in both. ros2cli flags with no meaning here (--no-daemon,
+    --spin-time, -s/--use-sim-time) are accepted and ignored.
     """
+
+
+count_option = click.option(
+    "-c", "--count-actions", "--count", "count", is_flag=True, help="Only the number of actions."
+)
+
+
+def _ros2_flags(graph: Any, verb: str, **given: bool) -> None:
+    used = [name for name, value in given.items() if value]
+    if used and graph.style != "ros2":
+        flags = ", ".join("--" + name.replace("_", "-") for name in used)
+        raise RostoolError(f"action {verb} {flags}: ros2 action forms; under ROS 1 see `rostool action info`")
 
 
 @action.command("list")
 @click.option("-t", "--show-types", is_flag=True, help="ROS 2: also print each action's type.")
+@count_option
 @json_option
+@ignored_ros2_options("no_daemon", "spin_time", "use_sim_time")
 @click.pass_context
-def list_actions(ctx: click.Context, show_types: bool, as_json: bool) -> None:
+def list_actions(ctx: click.Context, show_types: bool, count: bool, as_json: bool) -> None:
     """List the actions of the live graph (namespaces with goal, cancel, status, feedback, result; on ROS 2
     actions with a server).
 
@@ -49,9 +69,11 @@ def list_actions(ctx: click.Context, show_types: bool, as_json: bool) -> None:
       rostool --ros2 action list -t          # /fibonacci [example_interfaces/action/Fibonacci]
     """
     with live_graph(ctx) as graph:
-        if show_types and graph.style == "ros1":
-            raise RostoolError("action list -t applies to ROS 2 graphs only (ROS 1: `rostool action info`)")
+        _ros2_flags(graph, "list", show_types=show_types)
         found = graph.actions()
+    if count:
+        click.echo(str(len(found)))
+        return
     if as_json:
         print_json([vars(a) for a in found])
         return
@@ -63,28 +85,78 @@ def list_actions(ctx: click.Context, show_types: bool, as_json: bool) -> None:
 @click.argument("name", metavar="ACTION")
 @click.option("--wait", "wait", type=click.FloatRange(min=0), default=2.0, show_default=True,
               help="Seconds to wait for the server's goal status list.")  # fmt: skip
+@click.option("-t", "--show-types", is_flag=True, help="ROS 2: each client and server with the type.")
+@click.option("-c", "--count", is_flag=True, help="ROS 2: only the numbers of clients and servers.")
 @json_option
+@ignored_ros2_options("no_daemon", "spin_time", "use_sim_time")
 @click.pass_context
-def info(ctx: click.Context, name: str, wait: float, as_json: bool) -> None:
-    """Show an action's type, server, clients and the goals its server tracks.
+def info(ctx: click.Context, name: str, wait: float, show_types: bool, count: bool, as_json: bool) -> None:
+    """Show an action's type, server, clients and the goals its server tracks (ROS 2: its clients and
+    servers, as ros2 action info does; an action nobody serves or uses has 0 of each).
 
     \b
-    Example:
+    Examples:
       rostool action info /navigate_2d_action
+      rostool --ros2 action info -t /fibonacci
     """
     with live_graph(ctx) as graph:
-        found = graph.action_info(name, wait)
+        _ros2_flags(graph, "info", show_types=show_types, count=count)
         style = graph.style
+        if style == "ros2" and graph.resolve(name) not in {a.name for a in graph.actions()}:
+            found = {"name": graph.resolve(name), "type": None, "clients": [], "servers": []}
+        else:
+            found = graph.action_info(name, wait)
     if as_json:
         print_json(found)
     elif style == "ros1":
         _info_ros1(found, wait)
     else:
-        click.echo(f"Action: {found['name']}\nType: {found['type']}")
+        click.echo(f"Action: {name}")
         for title, nodes in (("Action clients", found["clients"]), ("Action servers", found["servers"])):
             click.echo(f"{title}: {len(nodes)}")
-            for node in nodes:
-                click.echo(f"    {node}")
+            for node in [] if count else nodes:
+                click.echo(f"    {node} [{found['type']}]" if show_types else f"    {node}")
+
+
+@action.command("type")
+@click.argument("name", metavar="ACTION")
+@ignored_ros2_options("no_daemon", "spin_time", "use_sim_time")
+@click.pass_context
+def type_(ctx: click.Context, name: str) -> None:
+    """Print an action's type (ros2 action type; nothing and exit 1 when no server announces it).
+
+    \b
+    Examples:
+      rostool --ros2 action type /fibonacci       # test_msgs/action/Fibonacci
+      rostool action type /navigate_2d_action
+    """
+    with live_graph(ctx) as graph:
+        resolved = graph.resolve(name)
+        types = sorted({a.type for a in graph.actions() if a.name == resolved and a.type})
+    if not types:
+        ctx.exit(1)
+    click.echo("\n".join(types))
+
+
+@action.command("find")
+@click.argument("type_name", metavar="TYPE")
+@count_option
+@ignored_ros2_options("no_daemon", "spin_time", "use_sim_time")
+@click.pass_context
+def find(ctx: click.Context, type_name: str, count: bool) -> None:
+    """List the actions of type TYPE (ros2 action find).
+
+    \b
+    Examples:
+      rostool --ros2 action find test_msgs/action/Fibonacci
+      rostool --ros2 action find -c test_msgs/action/Fibonacci
+    """
+    from rostool.interfaces.names import to_store_name
+
+    with live_graph(ctx) as graph:
+        wanted = {type_name, to_store_name(type_name, "action")}
+        names = sorted(a.name for a in graph.actions() if a.type in wanted)
+    click.echo(str(len(names)) if count else "\n".join(names), nl=count or bool(names))
 
 
 def _info_ros1(found: dict[str, Any], wait: float) -> None:
@@ -152,7 +224,9 @@ def _split_goal_args(values: tuple[str, ...]) -> tuple[str | None, tuple[str, ..
 @action.command("send-goal", context_settings={"ignore_unknown_options": True})
 @click.argument("name", metavar="ACTION")
 @click.argument("values", nargs=-1, required=True, metavar="[TYPE] GOAL...")
-@click.option("--feedback", "show_feedback", is_flag=True, help="Print each feedback message as it arrives.")
+@click.option(
+    "-f", "--feedback", "show_feedback", is_flag=True, help="Print each feedback message as it arrives."
+)
 @click.option(
     "--timeout",
     type=click.FloatRange(min=0, min_open=True),
@@ -160,6 +234,7 @@ def _split_goal_args(values: tuple[str, ...]) -> tuple[str | None, tuple[str, ..
 )
 @interfaces_option
 @json_option
+@ignored_ros2_options("no_daemon", "spin_time", "use_sim_time")
 @click.pass_context
 def send_goal(
     ctx: click.Context,
@@ -242,12 +317,21 @@ class _Ros2Renderer(_Renderer):
         from rostool.output.plain import to_plain
         from rostool.output.yaml_text import to_yaml
 
+        if not self.waited:  # ros2 prints it even when the server is there at once
+            self.waiting("Waiting for an action server to become available...")
         if self.as_json:
             goal_plain = to_plain(goal, "ros2")
             print_json({"event": "sent", "goal_id": goal_id, "accepted": accepted, "goal": goal_plain})
         else:
             answer = f"Goal accepted with ID: {goal_id}\n" if accepted else "Goal was rejected."
             click.echo(f"Sending goal:\n     {to_yaml(goal, 'ros2')}\n\n{answer}")
+        sys.stdout.flush()
+
+    waited = False
+
+    def waiting(self, text: str) -> None:
+        self.waited = True
+        click.echo(text, err=self.as_json)  # ros2 action send_goal prints it first, on stdout
         sys.stdout.flush()
 
     def canceling(self, goal_id: str) -> None:
@@ -322,3 +406,6 @@ def cancel(ctx: click.Context, name: str, goal_id: str | None, cancel_all: bool,
         click.echo(f"{count} {action}" + (":" if canceling else " to cancel"))
         for goal in canceling:
             click.echo(f"    {goal.goal_id}")
+
+
+action.add_command(send_goal, "send_goal")  # ros2 action's spelling
