@@ -9,33 +9,21 @@ mcap-ros2-support decoder for the recorded files.
 from __future__ import annotations
 
 import re
-import subprocess
 from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pytest
 
-from tests.ros2_peers import RclpyPeer, rostool_rclpy
+from tests.ros2_peers import RclpyPeer
 from tests.support import TESTDATA, rostool
+
+if TYPE_CHECKING:
+    from tests.ros2_backends import Tool
 from tests.test_ros2_bag_record import foxglove_decoded
 
 Start = Callable[..., RclpyPeer]
-Tool = Callable[..., "subprocess.CompletedProcess[str]"]
-
-
-@pytest.fixture(params=["dds", "rclpy"])
-def backend_tool(
-    request: pytest.FixtureRequest, graph_env: dict[str, str], tmp_path: Path, distro: str
-) -> Tool:
-    """rostool on the DDS backend, or on the rclpy backend in the distro's peer venv."""
-
-    def run(args: list[str], timeout: float = 60) -> subprocess.CompletedProcess[str]:
-        if request.param == "rclpy":
-            return rostool_rclpy(args, graph_env, tmp_path, distro, timeout=timeout)
-        return rostool(args, graph_env, timeout)
-
-    run.backend = request.param  # type: ignore[attr-defined]
-    return run
+pytest_plugins = ("tests.ros2_backends",)  # the `tool` and `backend` fixtures
 
 
 def read_back(path: Path) -> dict[str, list[object]]:
@@ -50,13 +38,13 @@ def read_back(path: Path) -> dict[str, list[object]]:
 
 @pytest.mark.parametrize("suffix", [".mcap", ".db3"])
 def test_record_from_real_publishers(
-    start_peer: Start, tmp_path: Path, suffix: str, backend_tool: Tool
+    start_peer: Start, tmp_path: Path, suffix: str, tool: Tool, backend: str
 ) -> None:
-    if suffix == ".db3" and backend_tool.backend == "rclpy":  # type: ignore[attr-defined]
+    if suffix == ".db3" and backend == "rclpy":
         pytest.skip("the storage is the backend's business: .mcap covers the rclpy source")
     start_peer("--name", "talker", "--talk", "/chatter", "--stamped", "/pose", "--rate", "50")
     out = tmp_path / f"real{suffix}"
-    done = backend_tool(["bag", "record", "/chatter", "/pose", "-O", str(out), "--duration", "3", "-q"])
+    done = tool(["bag", "record", "/chatter", "/pose", "-O", str(out), "--duration", "3", "-q"])
     assert done.returncode == 0, done.stderr
     recorded = read_back(out)
     # nothing lost between the first and the last message recorded (discovery takes about a second)
@@ -70,10 +58,10 @@ def test_record_from_real_publishers(
         assert decoded == [f"hello {n}" for n in numbers]
 
 
-def test_play_into_a_real_subscriber(start_peer: Start, backend_tool: Tool) -> None:
+def test_play_into_a_real_subscriber(start_peer: Start, tool: Tool, backend: str) -> None:
     peer = start_peer("--name", "listener", "--listen", "/topic")
     bag = TESTDATA / "ros2" / "talker_mcap"
-    done = backend_tool(["bag", "play", str(bag), "--topics", "/topic", "--wait-for-subscribers"])
+    done = tool(["bag", "play", str(bag), "--topics", "/topic", "--wait-for-subscribers"])
     assert done.returncode == 0, done.stderr
     expected = [f"Hello, world! {n}" for n in range(10)]
     peer.wait_for("heard", lambda e: e["data"] == expected[-1])

@@ -1,0 +1,60 @@
+"""Run one ROS 2 test on both backends: rostool's DDS (the test venv) and rclpy (the distro's peer venv,
+where test.sh installs rostool too, with the peers' loopback-only Fast DDS profile).
+
+    def test_x(tool: Tool, tool_popen: ToolPopen) -> None: ...   # runs as [<distro>-dds] and [<distro>-rclpy]
+"""
+
+from __future__ import annotations
+
+import re
+import subprocess
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+
+from tests.ros2_peers import rostool_rclpy, rostool_rclpy_popen
+from tests.support import rostool, rostool_popen
+
+BACKENDS = ("dds", "rclpy")
+Tool = Callable[..., "subprocess.CompletedProcess[str]"]
+ToolPopen = Callable[[list[str]], "subprocess.Popen[str]"]
+# the middleware's own log lines (Jazzy's rmw_fastrtps warns that FASTRTPS_DEFAULT_PROFILES_FILE, which the
+# peers' environment sets for Fast DDS 2, is deprecated): the user's RMW speaking, not rostool
+RMW_LOG = re.compile(r"^\[(WARN|INFO)\] \[[\d.]+\] \[rmw_")
+
+
+def rostool_lines(stderr: str) -> list[str]:
+    """stderr's lines without the RMW's own log lines."""
+    return [line for line in stderr.strip().splitlines() if not RMW_LOG.match(line)]
+
+
+@pytest.fixture(params=BACKENDS)
+def backend(request: pytest.FixtureRequest) -> str:
+    return str(request.param)
+
+
+@pytest.fixture
+def tool(backend: str, graph_env: dict[str, str], tmp_path: Path, distro: str) -> Tool:
+    """tool(args, timeout=30): rostool on the test's backend, in the test's graph; the result's
+    `stderr_lines` are stderr's lines without the RMW's own log lines."""
+
+    def run(args: list[str], timeout: float = 30) -> subprocess.CompletedProcess[str]:
+        if backend == "rclpy":
+            done = rostool_rclpy(args, graph_env, tmp_path, distro, timeout=timeout)
+        else:
+            done = rostool(args, graph_env, timeout)
+        done.stderr_lines = rostool_lines(done.stderr)  # type: ignore[attr-defined]
+        return done
+
+    return run
+
+
+@pytest.fixture
+def tool_popen(backend: str, graph_env: dict[str, str], tmp_path: Path, distro: str) -> ToolPopen:
+    def start(args: list[str]) -> subprocess.Popen[str]:
+        if backend == "rclpy":
+            return rostool_rclpy_popen(args, graph_env, tmp_path, distro)
+        return rostool_popen(args, graph_env)
+
+    return start
