@@ -114,7 +114,7 @@ def test_graph_of_a_real_rclpy_talker_and_listener(
 ) -> None:
     # names of this test only: another test run may share the DDS domain on a busy machine
     ns, topic = f"/gp{os.getpid()}", f"/chatter{os.getpid()}"
-    start_peer("--name", "talker", "--namespace", ns, "--talk", topic)
+    start_peer("--name", "talker", "--namespace", ns, "--talk", topic, "--service", f"{ns}/enable")
     start_peer("--name", "listener", "--namespace", ns + "_l", "--listen", topic)
     talker, listener = f"{ns}/talker", f"{ns}_l/listener"
 
@@ -135,7 +135,11 @@ def test_graph_of_a_real_rclpy_talker_and_listener(
     assert "/rosout" not in {t["name"] for t in listed["topics"]}  # type: ignore[attr-defined]
     every = json.loads(rostool(["graph", "--all", "--json"], graph_env).stdout)
     assert {"/rosout", "/parameter_events"} <= {t["name"] for t in every["topics"]}
-    inside = json.loads(rostool(["graph", "--ns", ns, "--json"], graph_env).stdout)
+    inside = json.loads(rostool(["graph", "--ns", ns, "--services", "--json"], graph_env).stdout)
+    # the node's own parameter services are left out unless --all
+    assert inside["services"] == [
+        {"name": f"{ns}/enable", "type": "std_srvs/srv/SetBool", "servers": [talker], "clients": []}
+    ]
     assert inside["nodes"] == [talker]
     assert inside["topics"] == [{**chatter, "subscribers": []}]  # the listener is outside NS
 
