@@ -26,6 +26,7 @@ COMMANDS: dict[str, tuple[str, str, str]] = {
     "msg": ("rostool.commands.msg", "msg", "Show message types and their md5sums."),
     "service": ("rostool.commands.service", "service", "List, inspect and call services."),
     "srv": ("rostool.commands.srv", "srv", "Show service types and their md5sums."),
+    "interface": ("rostool.commands.interface", "interface", "Show and list ROS 2 interface types."),
     "action": ("rostool.commands.action", "action", "List actions, send goals, follow feedback, cancel."),
     "bag": ("rostool.commands.bag", "bag", "Inspect, play, record and convert bags (.bag, .db3, .mcap)."),
     "graph": ("rostool.commands.graph", "graph", "Show the node/topic graph as text, DOT, JSON, SVG or PNG."),
