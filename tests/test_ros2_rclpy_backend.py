@@ -1,5 +1,7 @@
-"""The rclpy backend (`--ros2-backend rclpy`): selection, `doctor`, bad input, and the topic and node verbs
-against real rclpy nodes of Jazzy and Kilted (Fast DDS), with the same checks as test_ros2_real_topics.py.
+"""The rclpy backend (`--ros2-backend rclpy`): selection, `doctor`, bad input (a broken rclpy, a missing RMW
+library, types rclpy cannot import), and the topic, node, service, parameter and action verbs against real
+rclpy nodes of Jazzy and Kilted (Fast DDS). Services, parameters, actions and bags are also checked value by
+value on both backends in test_ros2_fastdds_rpc.py and test_ros2_real_bags.py.
 
 rostool runs in the distro's peer venv (test.sh installs it there) with the peers' loopback-only Fast DDS
 profile; where the argument forms are the same, its output must equal the DDS backend's.
@@ -332,11 +334,58 @@ def test_bad_input_on_a_real_graph(graph_env: dict[str, str], start_peer: Start,
     for args in (["node", "info", "/nobody"], ["topic", "echo", "/nothing", "--timeout", "1"]):
         mine = one_error_line(rclpy_tool(*args, timeout=20))
         assert mine == one_error_line(rostool(args, graph_env, timeout=20)), args  # the DDS backend's line
+    both_ways = ("source the workspace", "--ros2-backend dds")
     for args, words in (
-        (["topic", "pub", "/chatter", "std_msgs/msg/Nope", "data: 1", "-1"], "std_msgs/msg/Nope"),
-        (["topic", "pub", "/x", "nothere_msgs/msg/Thing", "a: 1", "-1"], "'nothere_msgs'"),
-        (["service", "list"], "--ros2-backend dds"),
-        (["param", "list", "/talker"], "--ros2-backend dds"),
-        (["bag", "record", "-a", "-O", "x.mcap"], "--ros2-backend dds"),
-    ):
-        one_error_line(rclpy_tool(*args, timeout=20), words)
+        (["topic", "pub", "/chatter", "std_msgs/msg/Nope", "data: 1", "-1"], ("std_msgs/msg/Nope",)),
+        (["topic", "pub", "/x", "nothere_msgs/msg/Thing", "a: 1", "-1"], ("'nothere_msgs'", *both_ways)),
+        # example_interfaces is not in the peer venv: rclpy cannot import it, the DDS backend has it built in
+        (["service", "call", "/add", "example_interfaces/srv/AddTwoInts", "{a: 1}"],
+         ("'example_interfaces'", *both_ways)),
+        (["action", "send-goal", "/fib", "example_interfaces/action/Fibonacci", "{order: 1}"],
+         ("'example_interfaces'", *both_ways)),
+        (["param", "get", "/talker", "nope"], ("parameter not set: node /talker has no parameter nope",)),
+    ):  # fmt: skip
+        one_error_line(rclpy_tool(*args, timeout=20), *words)
+
+
+def test_a_missing_rmw_library_is_one_line(graph_env: dict[str, str], tmp_path: Path, distro: str) -> None:
+    """rclpy imports its RMW library (the pip wheels link rmw_fastrtps_cpp): without it on LD_LIBRARY_PATH,
+    --ros2-backend rclpy is one line naming the library and the way out, and auto falls back to DDS."""
+    python = peer_python(distro)
+    lib = python.parent.parent / "lib"
+    libs = tmp_path / "libs_without_rmw"
+    libs.mkdir()
+    for found in lib.glob("*.so*"):
+        if not found.name.startswith("librmw_fastrtps_cpp.so"):
+            (libs / found.name).symlink_to(found)
+    probe = [str(python), "-c", "import os; print(os.environ['LD_LIBRARY_PATH'])"]
+    paths = subprocess.run(probe, capture_output=True, text=True, check=True).stdout.strip().split(":")
+    env = {**peer_env(graph_env, tmp_path), "_ROS_WHEELS_BOOTSTRAP_COMPLETE": "1",  # the wheels' re-exec
+           "LD_LIBRARY_PATH": ":".join(str(libs) if p == str(lib) else p for p in paths)}  # fmt: skip
+    command = [str(python), "-m", "rostool", "--ros2-backend", "rclpy", "topic", "list"]
+    named = subprocess.run(command, env=env, capture_output=True, text=True, timeout=30)
+    one_error_line(named, "RMW_IMPLEMENTATION='rmw_fastrtps_cpp' is not installed", "--ros2-backend dds")
+    env.pop("RMW_IMPLEMENTATION")  # the default RMW, which rclpy loads as it imports
+    done = subprocess.run(command, env=env, capture_output=True, text=True, timeout=30)
+    line = one_error_line(done, "the RMW library librmw_fastrtps_cpp.so is missing", "--ros2-backend dds")
+    assert "https://" not in line  # not rclpy's how-to link
+    doctor = subprocess.run([str(python), "-m", "rostool", "doctor", "--json"], env=env, capture_output=True,
+                            text=True, timeout=30)  # fmt: skip
+    report = json.loads(doctor.stdout)["ros2"]
+    assert report["backend"] == "dds" and "librmw_fastrtps_cpp.so" in report["reason"]
+
+
+def test_services_parameters_actions_print_as_the_dds_backend(
+    graph_env: dict[str, str], start_peer: Start, rclpy_tool: Tool
+) -> None:
+    """The same real node seen through rclpy and through rostool's DDS: the same text, GIDs and QoS too."""
+    start_peer("--name", "robot", "--service", "/flag", "--params", "--action", "/fib")
+    for args in (
+        ["service", "list", "-t"], ["service", "info", "/flag", "-v"], ["param", "dump", "/robot"],
+        ["param", "describe", "/robot", "speed", "ids"], ["action", "info", "/fib", "-t"],
+    ):  # fmt: skip
+        mine = rclpy_tool(*args)
+        assert mine.returncode == 0, (args, mine.stderr)
+        theirs = rostool(args, graph_env)
+        assert mine.stdout == theirs.stdout, (args, theirs.stderr)
+    assert "/fib [test_msgs/action/Fibonacci]" in rclpy_tool("action", "list", "-t").stdout

@@ -9,6 +9,7 @@ loading when the named RMW library is missing.
 from __future__ import annotations
 
 import os
+import re
 import sys
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -72,9 +73,18 @@ def import_problem() -> str | None:
         import rclpy  # noqa: F401
     except Exception as err:  # ImportError, OSError from a missing library, SyntaxError from a wrong Python
         text = " ".join(str(err).split()) or type(err).__name__
+        missing = _MISSING_LIBRARY.search(text)
+        if missing is not None:  # rclpy's C extension names the library first, then a long how-to
+            library = missing[1]
+            what = "the RMW library" if library.startswith("librmw_") else "the library"
+            return (f"rclpy is present but {what} {library} is missing (not on LD_LIBRARY_PATH: is the ROS 2 "
+                    "installation sourced, and its RMW installed?)")  # fmt: skip
         python = f"Python {sys.version_info.major}.{sys.version_info.minor}"
         return f"rclpy is present but does not import with {python} ({text})"
     return None
+
+
+_MISSING_LIBRARY = re.compile(r"(\S+\.so[.\d]*): cannot open shared object file")
 
 
 def rmw_problem(env: Mapping[str, str] = os.environ) -> str | None:
