@@ -105,7 +105,11 @@ PEER_ARGS = ("--name", "talker", "--talk", "/chatter", "--service", "/set_flag",
              "--params")  # fmt: skip
 
 
-def test_ros2_graph_names(graph_env: dict[str, str], start_peer: Callable[..., RclpyPeer]) -> None:
+def test_ros2_graph_names(
+    distro: str, graph_env: dict[str, str], start_peer: Callable[..., RclpyPeer], tmp_path: Path
+) -> None:
+    """Names of a real rclpy node through rostool's DDS backend, then through its rclpy backend (run in the
+    peer venv with --ros2-backend rclpy)."""
     start_peer(*PEER_ARGS)
     env = {**graph_env, TIMEOUT_ENV: GENEROUS}
     assert values(["topic", "echo", "/ch"], env) == ["/chatter"]
@@ -116,13 +120,7 @@ def test_ros2_graph_names(graph_env: dict[str, str], start_peer: Callable[..., R
     assert {"flag", "count", "speed", "use_sim_time"} <= set(params)
     assert values(["param", "describe", "/talker", "spe"], env) == ["speed"]
 
-
-def test_ros2_graph_names_on_the_rclpy_backend(
-    distro: str, graph_env: dict[str, str], start_peer: Callable[..., RclpyPeer], tmp_path: Path
-) -> None:
-    """The same names through rostool's rclpy backend (run in the peer venv, --ros2-backend rclpy)."""
-    start_peer(*PEER_ARGS)
-    env = peer_env({**graph_env, TIMEOUT_ENV: GENEROUS}, tmp_path)
+    env = peer_env(env, tmp_path)
     command = [str(peer_python(distro)), "-m", "rostool"]
     assert values(["--ros2-backend", "rclpy", "topic", "info", "/ch"], env, command) == ["/chatter"]
     assert "/talker" in values(["--ros2-backend", "rclpy", "node", "info", "/t"], env, command)
