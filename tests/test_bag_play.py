@@ -491,7 +491,8 @@ def test_prefix_and_skip_empty_into_ros2(tmp_path: Path) -> None:
     # ros2 topic echo's form: with no publisher yet, the TYPE makes it subscribe and wait
     echo = rostool_popen(["topic", "echo", "/pre/numbers", "std_msgs/msg/Int32", "-n", "10"], env)
     try:
-        args = ["--wait-for-subscribers", "-p", "/pre", "--skip-empty", "1", str(bag)]
+        # under ROS 2, -p is ros2 bag play's --start-paused: the prefix is spelled out
+        args = ["--wait-for-subscribers", "--prefix", "/pre", "--skip-empty", "1", str(bag)]
         began = time.monotonic()
         played = rostool(["bag", "play", *args], env, timeout=60)
         elapsed = time.monotonic() - began

@@ -572,7 +572,7 @@ ROS2_FORMS = {
     "rostopic pub <action>/goal <type>ActionGoal <goal>": (
         "rostool --ros2 action send-goal --feedback <action> <type> <goal>"
     ),
-    "rosbag record -O <file.bag>": "rostool --ros2 bag record -a -O <name>.mcap",
+    "rosbag record -O <file.bag>": "rostool --ros2 bag record -a -o <name>",
     "rosbag play --clock <file.bag>": "rostool --ros2 bag play --clock <bag>",
     "rostopic echo <topic>": "rostool --ros2 topic echo <topic> --qos-reliability best_effort",
 }

@@ -32,7 +32,7 @@ def test_ros2_bag_plays_into_ros2() -> None:
     # the whole bag: /rosout's rcl_interfaces/msg/Log plays too (no ROS 1 conversion involved)
     rosout = rostool_popen(["--ros2", "topic", "echo", "/rosout", "--json"], env)
     try:
-        played = rostool(["--ros2", "bag", "play", "-i", "-d", "1", str(TALKER)], env)
+        played = rostool(["--ros2", "bag", "play", "--immediate", "-d", "1", str(TALKER)], env)
         assert played.returncode == 0, played.stderr
         time.sleep(0.5)
     finally:
@@ -102,13 +102,13 @@ def test_ros1_bag_plays_into_ros2_converted() -> None:
     assert cmd_vel[0] == {"linear": {"x": 2.0, "y": 0.0, "z": 0.0}, "angular": {"x": 0.0, "y": 0.0, "z": 0.0}}
 
     # types ROS 2 lacks (rosgraph_msgs/Log, turtlesim/Pose, turtlesim/Color) play as converted, no warning
-    whole = rostool(["bag", "play", "-i", "-d", "0", str(EXAMPLE)], env, timeout=60)
+    whole = rostool(["bag", "play", "--immediate", "-d", "0", str(EXAMPLE)], env, timeout=60)
     assert (whole.returncode, whole.stderr) == (0, "")
 
 
 def test_latched_ros1_topic_is_transient_local_in_ros2() -> None:
     env = ros2_env()
-    player = rostool_popen(["bag", "play", "-i", "-k", str(EXAMPLE), "--topics", "/tf_static"], env)
+    player = rostool_popen(["bag", "play", "--immediate", "-k", str(EXAMPLE), "--topics", "/tf_static"], env)
     try:
         time.sleep(2)  # played and kept alive: only a transient_local writer still has the message
         late = rostool(["topic", "echo", "/tf_static", "-n", "1", "--json", "--timeout", "20"], env)
@@ -156,7 +156,7 @@ def test_ros1_type_laid_out_differently_in_ros2_is_skipped(tmp_path: Path) -> No
     assert played.returncode == 0, played.stderr
     assert played.stderr.splitlines() == [
         "rostool: warning: skipping /marker: visualization_msgs/msg/Marker is laid out differently in ROS 2",
-        "rostool: warning: no message was played (check -s/-u and --topics)",
+        "rostool: warning: no message was played (check --start-offset and --topics)",
     ]
 
     missing = rostool(["bag", "play", str(EXAMPLE), "--topics", "/nothing"], env)

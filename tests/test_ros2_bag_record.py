@@ -88,7 +88,10 @@ def test_record_all_into_ros2_bags(
     out = tmp_path / f"run.{suffix}"
     recorded = rostool(["bag", "record", "-a", "-O", str(out), "--duration", "2"], env)
     assert recorded.returncode == 0, recorded.stderr
-    assert recorded.stderr.startswith("recorded ") and f"on 3 topics to {out}" in recorded.stderr
+    assert (
+        recorded.stderr.splitlines()[-1].startswith("recorded ")
+        and f"on 3 topics to {out}" in recorded.stderr
+    )
     messages, types, durability = read_ros2(out)
     assert types == {
         "/chatter": "std_msgs/msg/String",
@@ -110,11 +113,15 @@ def test_record_all_into_ros2_bags(
         assert {schema for _topic, schema, _msg in decoded} == set(types.values())
 
 
-def test_default_name_is_a_dated_mcap(env: dict[str, str], publishers: None, tmp_path: Path) -> None:
+def test_default_name_is_a_dated_rosbag2_directory(
+    env: dict[str, str], publishers: None, tmp_path: Path
+) -> None:
+    """ros2 bag record's default: rosbag2_YYYY_MM_DD-HH_MM_SS/ with metadata.yaml and NAME_0.mcap."""
     recorded = rostool(["bag", "record", "/chatter", "--duration", "1"], env, cwd=tmp_path)
     assert recorded.returncode == 0, recorded.stderr
     (produced,) = tmp_path.iterdir()
-    assert produced.suffix == ".mcap" and produced.stem.count("-") == 5
+    assert produced.name.startswith("rosbag2_") and produced.name.count("_") == 5
+    assert sorted(p.name for p in produced.iterdir()) == ["metadata.yaml", f"{produced.name}_0.mcap"]
     messages, _types, _qos = read_ros2(produced)
     assert list(messages) == ["/chatter"]
 

@@ -36,6 +36,7 @@ class TopicInfo:
     count: int
     connections: int = 1
     frequency: float | None = None  # Hz, from the median period (as `rosbag info --freq`)
+    serialization: str = "cdr"  # ROS 2: the topic's serialization format
 
 
 @dataclass
@@ -54,6 +55,7 @@ class BagInfo:
     files: list[str] = field(default_factory=list)
     chunk_sizes: tuple[int, int] | None = None  # (uncompressed, compressed) bytes when compressed
     note: str = ""
+    ros_distro: str = ""  # ROS 2: the distro that recorded it, where stored
 
     @property
     def ros_version(self) -> int:
@@ -204,7 +206,15 @@ def _rosbag2_info(bag: BagInput) -> BagInfo:
         topics, types = [], {}
         for entry in meta.get("topics_with_message_count") or []:
             topic = entry["topic_metadata"]
-            topics.append(TopicInfo(str(topic["name"]), str(topic["type"]), int(entry["message_count"])))
+            serialization = str(topic.get("serialization_format") or "cdr")
+            topics.append(
+                TopicInfo(
+                    str(topic["name"]),
+                    str(topic["type"]),
+                    int(entry["message_count"]),
+                    serialization=serialization,
+                )
+            )
             digest = str(topic.get("type_description_hash") or "")
             if not types.get(str(topic["type"])):
                 types[str(topic["type"])] = digest
@@ -226,6 +236,7 @@ def _rosbag2_info(bag: BagInput) -> BagInfo:
         types=[TypeInfo(name, digest) for name, digest in sorted(types.items())],
         topics=sorted(topics, key=lambda t: t.name),
         files=[f.name for f in bag.files],
+        ros_distro=str(meta.get("ros_distro") or ""),
     )
 
 
@@ -244,12 +255,15 @@ def _mcap_info(bag: BagInput) -> BagInfo:
     ends: list[int] = []
     profile = ""
     note = ""
+    distro = ""
     for number, path in enumerate(bag.files):
         with path.open("rb") as handle:
             try:
                 reader = make_reader(handle)
                 profile = reader.get_header().profile
                 summary = reader.get_summary()
+                if summary is not None and summary.metadata_indexes and not distro:
+                    distro = _mcap_distro(reader)
             except Exception:  # any damage in the summary section: count by scanning instead
                 summary = None
         if summary is not None and summary.statistics is not None:
@@ -293,7 +307,16 @@ def _mcap_info(bag: BagInput) -> BagInfo:
         topics=sorted(topics.values(), key=lambda t: t.name),
         files=[f.name for f in bag.files] if len(bag.files) > 1 else [],
         note=note,
+        ros_distro=distro,
     )
+
+
+def _mcap_distro(reader: Any) -> str:
+    """rosbag2 stores its metadata.yaml text in an mcap metadata record named `rosbag2`."""
+    for record in reader.iter_metadata():
+        if record.name == "rosbag2":
+            return str(record.metadata.get("ros_distro", ""))
+    return ""
 
 
 def _mcap_compression(chunk_indexes: list[Any]) -> str:
@@ -353,6 +376,7 @@ def _db3_info(bag: BagInput) -> BagInfo:
     start: int | None = None
     end: int | None = None
     version = ""
+    distro = ""
     for path in bag.files:
         try:
             db = sqlite3.connect(f"file:{path}?mode=ro&immutable=1", uri=True)
@@ -366,6 +390,8 @@ def _db3_info(bag: BagInput) -> BagInfo:
             if "schema" in tables:
                 row = db.execute("SELECT schema_version FROM schema").fetchone()
                 version = f"sqlite3 schema {row[0]}" if row else version
+                if row and "ros_distro" in {r[1] for r in db.execute("PRAGMA table_info(schema)")}:
+                    distro = str(db.execute("SELECT ros_distro FROM schema").fetchone()[0] or "")
             columns = {row[1] for row in db.execute("PRAGMA table_info(topics)")}
             hash_column = "type_description_hash" if "type_description_hash" in columns else "''"
             names = {}
@@ -400,6 +426,7 @@ def _db3_info(bag: BagInput) -> BagInfo:
         types=[TypeInfo(name, digest) for name, digest in sorted(types.items())],
         topics=[TopicInfo(name, topic_types.get(name, ""), counts[name]) for name in sorted(topic_types)],
         files=[f.name for f in bag.files] if len(bag.files) > 1 else [],
+        ros_distro=distro,
     )
 
 
@@ -451,7 +478,17 @@ def _duration(duration: float) -> str:
 
 
 def format_text(info: BagInfo) -> str:
-    """Human output laid out like `rosbag info` (ROS 2 bags add `storage:` and use ROS 2 type names)."""
+    """Human output laid out as the bag's own tool prints it: `rosbag info` for ROS 1 bags, `ros2 bag
+    info` for rosbag2 directories, .mcap and .db3 files (see `rosbag2_info.format_ros2`)."""
+    if info.ros_version == 2:
+        from rostool.bag.rosbag2_info import format_ros2
+
+        return format_ros2(info)
+    return format_rosbag(info)
+
+
+def format_rosbag(info: BagInfo) -> str:
+    """`rosbag info`'s layout (ROS 2 bags add `storage:` and use ROS 2 type names)."""
     rows: list[tuple[str, str]] = [("path", info.path), ("version", info.version)]
     if info.ros_version == 2:
         rows.append(("storage", f"{info.storage} ({FORMAT_NAMES[info.format]})"))

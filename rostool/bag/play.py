@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import re
 import select
 import struct
 import sys
@@ -63,6 +64,11 @@ class PlayOptions:
     prefix: str = ""  # prepended to every bag topic, before remapping
     skip_empty: float | None = None  # seconds: longer gaps between messages are skipped
     pause_topics: Sequence[str] = ()  # bag topics: pause before publishing a message on them
+    # ros2 bag play's filters and end
+    exclude: Sequence[str] = ()  # bag topics not to play
+    regex: str | None = None  # play only topics whose name contains a match
+    exclude_regex: str | None = None  # leave out topics whose name contains a match
+    until: float | None = None  # bag time (seconds since the epoch) where playing ends
 
 
 @dataclass
@@ -214,7 +220,7 @@ class Player:
         self._started = False
         self.total = (reader.end_ns - reader.start_ns) / 1e9 if reader.message_count else 0.0
         self.window = self._window()
-        self.connections = reader.select([graph.resolve(t) for t in options.topics])
+        self.connections = self._select()
         self.remap = {graph.resolve(name): graph.resolve(to) for name, to in options.remap.items()}
         self.pause_topics = self._pause_topics()
         self._pause_for_topics = bool(self.pause_topics)  # 't' toggles it
@@ -230,9 +236,26 @@ class Player:
             )
         return names
 
+    def _select(self) -> list[Connection]:
+        options, resolve = self.options, self.graph.resolve
+        conns = self.reader.select(
+            [resolve(t) for t in options.topics], [resolve(t) for t in options.exclude]
+        )
+        for pattern, keep in ((options.regex, True), (options.exclude_regex, False)):
+            if pattern:
+                try:
+                    compiled = re.compile(pattern)
+                except re.error as err:
+                    raise RostoolError(f"bad regular expression {pattern!r}: {err}") from err
+                conns = [c for c in conns if bool(compiled.search(c.topic)) == keep]
+        return conns
+
     def _window(self) -> tuple[int, int | None]:
         start = self.reader.start_ns + round(self.options.start * 1e9)
         end = None if self.options.duration is None else start + round(self.options.duration * 1e9)
+        if self.options.until is not None:
+            until = round(self.options.until * 1e9)
+            end = until if end is None else min(end, until)
         return start, end
 
     # -- advertising -----------------------------------------------------------------------------

@@ -18,6 +18,7 @@ import os
 import re
 import shutil
 import signal
+import struct
 import threading
 import time
 from collections.abc import Callable, Iterator, Mapping, Sequence
@@ -29,11 +30,13 @@ from typing import Any, Literal, Protocol
 
 from rostool.bag.crossver import CrossVersionStores
 from rostool.bag.ros1_writer import BagWriter, WriteFailed
+from rostool.bag.rosbag2_dir import Rosbag2DirSink, Rosbag2Layout
 from rostool.errors import RostoolError
 from rostool.graph.recording import RecordSource
 
 Format = Literal["bag", "mcap", "db3"]
 SUFFIXES: dict[str, Format] = {".bag": "bag", ".mcap": "mcap", ".db3": "db3"}
+_CLOCK = struct.Struct("<iI")  # builtin_interfaces/Time after the 4-byte CDR header
 POLL_INTERVAL = 0.5  # how often the master is asked for new topics (-a, -e)
 FLUSH_INTERVAL = 0.1  # the most a SIGKILL can lose, in seconds of messages
 
@@ -57,6 +60,10 @@ class RecordOptions:
     buffer_bytes: int = 256 * 1024 * 1024
     compression: str = "none"
     force: bool = False
+    # ROS 2 forms (`ros2 bag record`): a rosbag2 directory (None: one file), which topics, which clock
+    rosbag2: Rosbag2Layout | None = None
+    wanted: Callable[[str], bool] | None = None  # replaces -a/-e/-x matching when given
+    use_sim_time: bool = False  # stamp with the latest /clock; nothing is written before the first one
 
 
 @dataclass
@@ -217,7 +224,14 @@ class Ros2Sink:
     """One .mcap or .db3 file (rosbags' writer): ROS 2 CDR as received, or ROS 1 messages converted to CDR
     with ROS 2 type names."""
 
-    def __init__(self, final: Path, fmt: Format, source: RecordSource, force: bool) -> None:
+    def __init__(
+        self,
+        final: Path,
+        fmt: Format,
+        source: RecordSource,
+        force: bool,
+        compression: tuple[str, str] | None = None,
+    ) -> None:
         from rosbags.rosbag2 import StoragePlugin
         from rosbags.rosbag2 import Writer as Writer2
 
@@ -230,7 +244,12 @@ class Ros2Sink:
             shutil.rmtree(self.active)
         plugin = StoragePlugin.MCAP if fmt == "mcap" else StoragePlugin.SQLITE3
         try:
-            self.writer: Any = Writer2(self.active, version=8, storage_plugin=plugin)
+            self.writer: Any = Writer2(self.active, version=9, storage_plugin=plugin)
+            if compression is not None:
+                from rosbags.rosbag2.enums import CompressionFormat, CompressionMode
+
+                mode, form = compression  # rosbag2's --compression-mode file|message, --compression-format
+                self.writer.set_compression(CompressionMode[mode.upper()], CompressionFormat[form.upper()])
             self.writer.open()
         except OSError as err:
             raise _open_failure(self.active, err) from err
@@ -240,6 +259,8 @@ class Ros2Sink:
         self.problems: dict[str, str] = {}
         self._bytes = 0
         self._chunk_started = time.monotonic()
+        self.metadata: dict[str, Any] = {}  # the part's rosbag2 metadata, read when closed
+        self.compressed = compression is not None
 
     @property
     def size(self) -> int:
@@ -290,6 +311,8 @@ class Ros2Sink:
         storage = self.writer.storage
         if storage is None:
             return
+        if self.compressed:  # the file is written through a compressor: nothing to push early
+            return
         if self.fmt == "mcap":
             # Close the pending chunk now and then so a killed recorder leaves a reindexable file.
             if storage.chunk.bio.tell() and time.monotonic() - self._chunk_started >= 1.0:
@@ -304,7 +327,15 @@ class Ros2Sink:
             self.writer.close()
         except OSError as err:
             raise RostoolError(f"{self.active}: cannot finish the bag: {err.strerror or err}") from err
+        import yaml
+
+        with contextlib.suppress(OSError, yaml.YAMLError, TypeError):
+            text = (self.active / "metadata.yaml").read_text()
+            self.metadata = yaml.safe_load(text)["rosbag2_bagfile_information"]
         produced = self.active / f"{self.active.name}.{self.fmt}"
+        if not produced.exists():  # file compression: NAME.mcap.zstd
+            produced = next(self.active.glob(f"{self.active.name}.{self.fmt}.*"), produced)
+            self.final = self.final.with_name(self.final.name + produced.name[len(self.active.name) + 4 :])
         os.replace(produced, self.final)
         shutil.rmtree(self.active, ignore_errors=True)
 
@@ -325,10 +356,11 @@ class _Queue:
         self.lock = threading.Lock()
         self.ready = threading.Event()
         self.accepting = True
+        self.clock: Callable[[], int | None] | None = None  # --use-sim-time: the latest /clock, if any
 
     def put(self, topic: str, payload: bytes, origin: Any) -> None:
-        now = time.time_ns()
-        if not self.accepting:
+        now = time.time_ns() if self.clock is None else self.clock()
+        if not self.accepting or now is None:
             return
         size = len(payload)
         with self.lock:
@@ -355,7 +387,7 @@ class _Queue:
 # -- the recorder --------------------------------------------------------------------------------
 class Recorder:
     def __init__(self, source: RecordSource, options: RecordOptions) -> None:
-        if not options.topics and not options.all_topics and options.node is None:
+        if not options.topics and not options.all_topics and options.node is None and options.wanted is None:
             raise RostoolError("no topics to record: name them, or use -a (all), -e REGEX or --node NODE")
         if options.split and options.size is None and options.duration is None:
             raise RostoolError("--split needs --size MB or --duration D")
@@ -383,6 +415,11 @@ class Recorder:
 
     # -- files -----------------------------------------------------------------------------------
     def _open_next(self) -> Sink:
+        layout = self.options.rosbag2
+        if layout is not None:
+            self._file_start = None
+            self._written_in_file = 0
+            return Rosbag2DirSink(layout, self.source, self.options.force)
         path = target_name(self.options, self.fmt, self._split_index)
         _check_target(path, self.options.force)
         if self.fmt == "bag":
@@ -410,6 +447,8 @@ class Recorder:
 
     # -- subscribing -----------------------------------------------------------------------------
     def _wanted(self, topic: str) -> bool:
+        if self.options.wanted is not None:
+            return self.options.wanted(topic)
         if self.exclude is not None and self.exclude.fullmatch(topic):
             return False
         if self.options.all_topics:
@@ -421,6 +460,23 @@ class Recorder:
             return
         self._subscribed.add(topic)
         self.source.subscribe(topic, self.queue.put)
+
+    def _follow_clock(self) -> None:
+        """--use-sim-time: stamp messages with the latest /clock (rosgraph_msgs/msg/Clock, CDR)."""
+        latest: list[int] = []
+        self.queue.clock = lambda: latest[0] if latest else None
+        record_clock = "/clock" in self.options.topics or self._wanted("/clock")
+        put = self.queue.put
+
+        def on_clock(topic: str, payload: bytes, origin: Any) -> None:
+            if len(payload) >= 12:
+                sec, nanosec = _CLOCK.unpack_from(payload, 4)
+                latest[:] = [sec * 1_000_000_000 + nanosec]
+            if record_clock:
+                put(topic, payload, origin)
+
+        self._subscribed.add("/clock")
+        self.source.subscribe("/clock", on_clock)
 
     def _discover(self) -> None:
         node = self.options.node
@@ -526,6 +582,8 @@ class Recorder:
             writer.join()
             raise self._open_error
         try:
+            if options.use_sim_time:
+                self._follow_clock()
             if not options.regex:
                 for topic in options.topics:
                     name = self.source.resolve(topic)
@@ -539,7 +597,8 @@ class Recorder:
                     break
                 if options.duration is not None and not options.split and now - started >= options.duration:
                     break
-                if (options.all_topics or options.regex or options.node) and now >= next_poll:
+                discovering = options.all_topics or options.regex or options.node or options.wanted
+                if discovering and now >= next_poll:
                     self._discover()
                     next_poll = now + POLL_INTERVAL
                 if report is not None:

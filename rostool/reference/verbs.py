@@ -37,7 +37,11 @@ class Resolved:
 def resolve(form: str, root: click.Command) -> Resolved:
     """Walk `form` down the tree: while the current command is a group, a flag must be one of the
     group's options (`rostool --ros2 ...`) and any other word must name a subcommand."""
-    ctx = click.Context(root, info_name="rostool")
+    from types import SimpleNamespace
+
+    # The version a form is written for chooses the verb (`bag record` has ROS 2 forms): --ros2 or ROS 1.
+    version = 2 if "--ros2" in form.split() else 1
+    ctx = click.Context(root, info_name="rostool", obj=SimpleNamespace(ros_version=version))
     command, path = root, ("rostool",)
     words = form.split()[1:]
     while words and isinstance(command, click.Group):
