@@ -107,21 +107,24 @@ def main() -> None:
     parser.add_argument("--camera-gb", type=float, default=0.5)
     parser.add_argument("--fleet-msgs", type=int, default=20_000, help="Odometry messages per fleet bag")
     parser.add_argument("--runs", type=int, default=1)
+    parser.add_argument("--fleet-only", action="store_true", help="Only the -j 1 / -j 2 comparison")
     args = parser.parse_args()
     print(f"load average at start: {' '.join(f'{x:.2f}' for x in os.getloadavg())} on {os.cpu_count()} cores")
     work = Path(tempfile.mkdtemp(prefix="rostool-bench-export-", dir="/tmp"))
     try:
         odom, camera, fleet = work / "odom.bag", work / "camera.bag", work / "fleet"
-        count = generate_odom(odom, args.odom_msgs)
-        print(f"generated {odom.name}: {odom.stat().st_size / 1e6:.0f} MB, {count} msgs")
-        count = generate_bag(camera, args.camera_gb)
-        print(f"generated {camera.name}: {camera.stat().st_size / 1e6:.0f} MB, {count} msgs")
+        singles = [] if args.fleet_only else [odom, camera]
+        if singles:
+            count = generate_odom(odom, args.odom_msgs)
+            print(f"generated {odom.name}: {odom.stat().st_size / 1e6:.0f} MB, {count} msgs")
+            count = generate_bag(camera, args.camera_gb)
+            print(f"generated {camera.name}: {camera.stat().st_size / 1e6:.0f} MB, {count} msgs")
         fleet.mkdir()
         for i in range(20):
             generate_odom(fleet / f"robot{i:02d}.bag", args.fleet_msgs)
         fleet_size = sum(p.stat().st_size for p in fleet.iterdir())
         print(f"generated {fleet.name}/: 20 bags, {fleet_size / 1e6:.0f} MB, {20 * args.fleet_msgs} msgs")
-        for bag in (odom, camera):
+        for bag in singles:
             size = bag.stat().st_size
             floor, count = rosbags_floor(bag)
             print(f"\n{bag.name}: {count} msgs, {size / 1e6:.0f} MB")

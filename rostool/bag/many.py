@@ -8,6 +8,7 @@ path), however the processes finish. One progress bar on stderr when it is a ter
 
 from __future__ import annotations
 
+import contextlib
 import os
 import re
 import signal
@@ -115,8 +116,32 @@ def _call(func: Callable[[BagItem], T], item: BagItem) -> T | Failure:
         return Failure(str(err), err.exit_code)
 
 
-def _ignore_sigint() -> None:
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent ends the workers on Ctrl+C
+_busy = False  # in a worker process: a bag is being processed
+_interrupted = False
+
+
+def _worker_init() -> None:
+    signal.signal(signal.SIGINT, _on_sigint)
+
+
+def _on_sigint(signum: int, frame: object) -> None:
+    """Ctrl+C reaches the workers too (and the parent forwards it): a busy worker stops its bag, which
+    removes its partial files; an idle one ignores it (no traceback from the pool's own loop)."""
+    global _interrupted
+    if _busy and not _interrupted:
+        _interrupted = True
+        raise KeyboardInterrupt
+
+
+def _worker_call(func: Callable[[BagItem], T], item: BagItem) -> T | Failure:
+    global _busy, _interrupted
+    _busy, _interrupted = True, False
+    try:
+        return _call(func, item)
+    except KeyboardInterrupt:
+        return Failure("interrupted", 130)
+    finally:
+        _busy = False
 
 
 def run(
@@ -142,18 +167,21 @@ def run(
         context = multiprocessing.get_context("forkserver")
         module = getattr(getattr(func, "func", func), "__module__", __name__)  # func may be a partial
         context.set_forkserver_preload(["rostool.bag.reader", module])
-        pool = ProcessPoolExecutor(min(jobs, len(items)), mp_context=context, initializer=_ignore_sigint)
+        pool = ProcessPoolExecutor(min(jobs, len(items)), mp_context=context, initializer=_worker_init)
+        futures = []
         try:
-            futures = [pool.submit(_call, func, item) for item in items]
+            futures = [pool.submit(_worker_call, func, item) for item in items]
             for future in futures:
                 future.add_done_callback(lambda _f: progress.advance())
             for item, future in zip(items, futures, strict=True):
                 yield item, future.result()
-        except BaseException:
-            processes = list((getattr(pool, "_processes", None) or {}).values())
-            pool.shutdown(wait=False, cancel_futures=True)
-            for process in processes:
-                process.terminate()
+        except BaseException:  # Ctrl+C, or a failure that ends the command: stop the busy workers
+            for future in futures:
+                future.cancel()
+            for process in list((getattr(pool, "_processes", None) or {}).values()):
+                with contextlib.suppress(OSError):
+                    os.kill(process.pid, signal.SIGINT)
+            pool.shutdown(wait=True, cancel_futures=True)
             raise
         pool.shutdown()
 
@@ -209,6 +237,8 @@ def successes(
         for item, result in results:
             if not isinstance(result, Failure):
                 yield item, result
+            elif result.exit_code == 130:  # a worker stopped by Ctrl+C: end as quietly as the parent does
+                raise KeyboardInterrupt
             elif not keep_going or len(items) == 1:
                 raise RostoolError(result.message, result.exit_code)
             else:
