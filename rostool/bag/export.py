@@ -74,8 +74,11 @@ def table_path(out: Path, topic: str, fmt: TableFormat, partition: str | None) -
     return out / topic_file(topic) / f"bag={partition}" / f"part-0.{fmt}"
 
 
-def export_bag(path: Path | str, options: ExportOptions, partition: str | None = None) -> ExportResult:
-    """Export one bag; `partition` (the bag's name) selects the dataset layout for several bags."""
+def export_bag(
+    path: Path | str, options: ExportOptions, partition: str | None = None, progress: bool = False
+) -> ExportResult:
+    """Export one bag; `partition` (the bag's name) selects the dataset layout for several bags;
+    `progress` shows a bar over the messages on stderr."""
     from rostool.bag.reader import BagReader
 
     result = ExportResult(str(path))
@@ -90,10 +93,13 @@ def export_bag(path: Path | str, options: ExportOptions, partition: str | None =
         tables: dict[str, _Table] = {}
         images: dict[str, Any] = {}
         skipped: set[str] = set()
+        bar = _Bar(sum(conn.msgcount for conn in conns), str(path)) if progress else None
         try:
             for conn, timestamp, data in reader.messages(conns) if conns else ():
                 msg = reader.deserialize(data, conn)
                 result.messages += 1
+                if bar is not None and not result.messages % 1024:
+                    bar.update(result.messages)
                 result.bytes += len(data)
                 topic = conn.topic
                 if conn.msgtype in IMAGE_TYPES and options.images is not None:
@@ -122,7 +128,11 @@ def export_bag(path: Path | str, options: ExportOptions, partition: str | None =
                 result.files.append(str(table.close()))
             for sink in images.values():
                 result.files.extend(str(p) for p in sink.close())
+            if bar is not None:
+                bar.stop()
         except BaseException:
+            if bar is not None:
+                bar.stop()
             for table in tables.values():
                 table.discard()
             for sink in images.values():
@@ -264,3 +274,24 @@ def _json_ready(value: Any) -> Any:
     if isinstance(value, (list, tuple)):
         return [_json_ready(item) for item in value]
     return value
+
+
+class _Bar:
+    """A rich progress bar over one bag's messages (transient: gone when the export ends)."""
+
+    def __init__(self, total: int, name: str) -> None:
+        from rich.console import Console
+        from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+
+        self._progress = Progress(
+            TextColumn("exporting"), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn(),
+            console=Console(stderr=True), transient=True,
+        )  # fmt: skip
+        self._task = self._progress.add_task(name, total=total or None)
+        self._progress.start()
+
+    def update(self, done: int) -> None:
+        self._progress.update(self._task, completed=done)
+
+    def stop(self) -> None:
+        self._progress.stop()

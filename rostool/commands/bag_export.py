@@ -98,9 +98,12 @@ def export(
 
 
 def _export_one(options: ExportOptions, several: bool, item: BagItem) -> ExportResult:
+    import sys
+
     from rostool.bag.export import export_bag
 
-    return export_bag(item.path, options, partition=item.name if several else None)
+    progress = not several and sys.stderr.isatty()
+    return export_bag(item.path, options, partition=item.name if several else None, progress=progress)
 
 
 def _make_folder(path: Path) -> None:
