@@ -147,3 +147,25 @@ def test_convert_and_filter_each_bag_of_a_directory(fleet: Path, tmp_path: Path)
     assert sorted(p.name for p in filtered.iterdir()) == ["a.bag", "b.bag", "sub__c.bag", "talker_mcap"]
     chatter = [i["messages"] for i in json.loads(run_ok(["bag", "info", str(filtered), "--json"]))]
     assert chatter == [30, 20, 10, 0]
+
+
+def test_topics_some_bags_lack(fleet: Path, tmp_path: Path) -> None:
+    """In a fleet a named topic may be missing from some bags: they contribute nothing, no error."""
+    out = tmp_path / "filtered"
+    result = rostool(["bag", "filter", str(fleet), str(out), "--topics", "/topic,/cmd_vel", "-j", "1"], env())
+    assert result.returncode == 0, result.stderr
+    counts = {
+        Path(i["path"]).name: i["messages"] for i in json.loads(run_ok(["bag", "info", str(out), "--json"]))
+    }
+    assert counts == {"a.bag": 30, "b.bag": 20, "sub__c.bag": 10, "talker_mcap": 10}
+    tables = tmp_path / "tables"
+    run_ok(["bag", "export", str(fleet), "--topics", "/topic", "-o", str(tables), "-j", "1"])
+    assert [str(p.relative_to(tables)) for p in tables.rglob("*.parquet")] == [
+        "topic/bag=talker_mcap/part-0.parquet"
+    ]
+    text = run_ok(["bag", "echo", str(fleet), "/topic", "--json", "-j", "1"])
+    assert {json.loads(line)["bag"] for line in text.splitlines()} == {"talker_mcap"}
+    csv = rostool(["bag", "echo", str(fleet / "a.bag"), str(fleet / "b.bag"), "/chatter", "--csv"], env())
+    assert csv.returncode == 1 and csv.stderr == (
+        "rostool: --csv prints one bag: for several, use `rostool bag export --format csv`\n"
+    )

@@ -18,6 +18,7 @@ from typing import Any, Literal
 
 from rostool.bag.export_columns import Column, TypePlan, arrow_type, is_scalar
 from rostool.bag.open import warn
+from rostool.bag.typestores import DEFAULT_DISTRO
 from rostool.errors import RostoolError
 
 TableFormat = Literal["parquet", "csv"]
@@ -32,7 +33,7 @@ class ExportOptions:
     topics: Sequence[str] = ()
     images: Path | None = None
     video: bool = False
-    distro: str = "humble"
+    distro: str = DEFAULT_DISTRO
     batch_rows: int = 8192
     batch_bytes: int = 32 * 1024 * 1024
 

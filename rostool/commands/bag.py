@@ -65,7 +65,8 @@ jobs_option = click.option(
     "--jobs",
     type=click.IntRange(min=1),
     metavar="N",
-    help="Work on N bags at once, in parallel processes (default: the number of cores).",
+    help="Work on N bags at once, in parallel processes (default: the number of cores, once the bags "
+    "hold 64 MB or more).",
 )
 
 
@@ -439,8 +440,18 @@ def _copy_each(job: _CopyJob, sources: Sequence[str], jobs: int | None) -> None:
         Path(job.out).mkdir(parents=True, exist_ok=True)
     except OSError as err:
         raise RostoolError(f"{job.out}: cannot create the output folder: {err.strerror or err}") from err
-    for _item, (written, topics, dst) in successes(partial(_copy_one, job), items, jobs, "copying"):
-        _report(written, topics, dst)
+    for item, (written, topics, dst) in successes(partial(_copy_one, job), items, jobs, "copying"):
+        if dst:
+            _report(written, topics, dst)
+        else:
+            click.echo(f"{item.path}: none of the --topics, nothing written", err=True)
+
+
+def _present_topics(item: BagItem, job: _CopyJob) -> list[str]:
+    from rostool.bag.reader import BagReader
+
+    with BagReader([item.path], job.distro) as reader:
+        return [name for name in job.selection.topics if name in reader.topics]
 
 
 def _copy_one(job: _CopyJob, item: BagItem) -> tuple[int, int, str]:
@@ -449,11 +460,15 @@ def _copy_one(job: _CopyJob, item: BagItem) -> tuple[int, int, str]:
 
     from rostool.bag.convert import copy_bags
 
+    selection = dataclasses.replace(job.selection, predicate=_echo_filter(job.expr))
+    if job.selection.topics:  # a fleet: not every bag has every topic
+        selection.topics = _present_topics(item, job)
+        if not selection.topics:
+            return 0, 0, ""
     suffix = {"bag": ".bag", "mcap": ".mcap", "db3": ".db3"}.get(job.fmt or "", "")
     if job.fmt is None and job.like_input and item.path.is_file():
         suffix = item.path.suffix
     dst = str(Path(job.out) / f"{item.name}{suffix}")
-    selection = dataclasses.replace(job.selection, predicate=_echo_filter(job.expr))
     result = copy_bags(
         [item.path], dst, job.fmt, selection, distro=job.distro, force=job.force, progress=False,
         like_input=job.like_input,
