@@ -320,7 +320,7 @@ def record(ctx: click.Context, qos: QosRequest, **opts: Any) -> None:
         recorder = Recorder(source, options)
         if opts["no_discovery"]:
             selector.freeze(source.published_topics())
-        if not quiet:
+        if not quiet and sys.stderr.isatty():  # piped, stderr carries only warnings, errors and the summary
             click.echo("[INFO] [rosbag2_recorder]: Listening for topics...", err=True)
             click.echo("[INFO] [rosbag2_recorder]: Recording...", err=True)
         with stop_on_signals(stop):
