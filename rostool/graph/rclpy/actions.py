@@ -67,38 +67,26 @@ def _server_ready(client: Any, deadline: float) -> bool:
     return True
 
 
-class ActionVerbs:
-    def actions(self: RclpyGraph) -> list[Any]:
-        """Actions with a server (a `<action>/_action/send_goal` service), with their client nodes."""
-        found: dict[str, ActionSummary] = {}
-        for name, type_, servers, clients in self.service_endpoints():
-            split = ros2_actions.split_action_service(name)
-            if split is None or split[1] != "send_goal":
-                continue
-            found[split[0]] = ActionSummary(split[0], type_.removesuffix("_SendGoal"), servers, clients)
-        return [found[name] for name in sorted(found)]
+def list_actions(graph: RclpyGraph) -> list[ActionSummary]:
+    """Actions with a server (a `<action>/_action/send_goal` service), with their client nodes."""
+    found: dict[str, ActionSummary] = {}
+    for name, type_, servers, clients in graph.service_endpoints():
+        split = ros2_actions.split_action_service(name)
+        if split is None or split[1] != "send_goal":
+            continue
+        found[split[0]] = ActionSummary(split[0], type_.removesuffix("_SendGoal"), servers, clients)
+    return [found[name] for name in sorted(found)]
 
-    def action_info(self: RclpyGraph, name: str, wait: float) -> dict[str, Any]:
-        action = self.resolve(name)
-        found = next((a for a in self.actions() if a.name == action), None)
-        if found is None:
-            raise RostoolError(f"unknown action {action}: no server announces it (`rostool action list`)")
-        return vars(found)
 
-    def cancel_goals(self: RclpyGraph, name: str, goal_id: str | None) -> list[Any]:
-        action = self.resolve(name)
-        wanted = ros2_actions.parse_goal_id(goal_id) if goal_id is not None else bytes(16)
-        response = _cancel(self, action, wanted, 5.0)
-        what = f"goal {wanted.hex()}" if goal_id is not None else "every goal"
-        if response.return_code != 0:
-            why = CANCEL_ERRORS.get(response.return_code, f"return code {response.return_code}")
-            raise RostoolError(f"canceling {what} of {action} failed: {why}")
-        return [CancelingGoal(bytes(g.goal_id.uuid).hex(), g.stamp) for g in response.goals_canceling]
-
-    def send_goal(
-        self: RclpyGraph, name: str, kind: str | None, goal: Any, timeout: float | None, watcher: GoalWatcher
-    ) -> Any:
-        return GoalRun(self, name, kind, goal, timeout, watcher).run()
+def cancel_goals(graph: RclpyGraph, name: str, goal_id: str | None) -> list[CancelingGoal]:
+    action = graph.resolve(name)
+    wanted = ros2_actions.parse_goal_id(goal_id) if goal_id is not None else bytes(16)
+    response = _cancel(graph, action, wanted, 5.0)
+    what = f"goal {wanted.hex()}" if goal_id is not None else "every goal"
+    if response.return_code != 0:
+        why = CANCEL_ERRORS.get(response.return_code, f"return code {response.return_code}")
+        raise RostoolError(f"canceling {what} of {action} failed: {why}")
+    return [CancelingGoal(bytes(g.goal_id.uuid).hex(), g.stamp) for g in response.goals_canceling]
 
 
 def _cancel(graph: RclpyGraph, action: str, goal_id: bytes, timeout: float) -> Any:

@@ -18,19 +18,18 @@ from typing import TYPE_CHECKING, Any, Literal
 from rostool.errors import RostoolError
 from rostool.graph.base import NodeInfo, Received, Subscription, TopicInfo
 from rostool.graph.rclpy import types as rtypes
-from rostool.graph.rclpy.actions import ActionVerbs
-from rostool.graph.rclpy.params import ParameterVerbs
 from rostool.graph.rclpy.recording import BagVerbs
 from rostool.graph.rclpy.refusals import NotYet
 from rostool.graph.rclpy.services import ServiceVerbs
+from rostool.graph.rclpy.verbs import ActionVerbs, ParameterVerbs
 from rostool.graph.ros2 import dds
 from rostool.graph.ros2.names import resolve
-from rostool.graph.ros2.types import TypeSupport
 
 if TYPE_CHECKING:
     from rostool.graph.qos import QosRequest
     from rostool.graph.rclpy.context import RclpyContext
     from rostool.graph.recording import Encoding
+    from rostool.graph.ros2.types import TypeSupport
 
 GRAPH_QUIET_SECONDS = 0.5
 # nothing but ourselves seen: how long before "no nodes found". A Fast DDS participant may answer a new one
@@ -57,7 +56,9 @@ class RclpyGraph(ServiceVerbs, ParameterVerbs, ActionVerbs, BagVerbs, NotYet):
 
         dds.domain_id()  # a bad ROS_DOMAIN_ID fails in one line before rcl sees it
         found = distro or rclpy_distro()[0]
-        self.types = TypeSupport(found if found in DISTROS else DEFAULT_DISTRO, tuple(interface_paths))
+        self._distro = found if found in DISTROS else DEFAULT_DISTRO
+        self._interface_paths = tuple(interface_paths)
+        self._types: TypeSupport | None = None
         self.qos_request = dds.QosRequest()
         self.warn: Callable[[str], None] = lambda text: print(f"WARNING: {text}", file=sys.stderr)
         base = node_name.strip("/")
@@ -66,6 +67,15 @@ class RclpyGraph(ServiceVerbs, ParameterVerbs, ActionVerbs, BagVerbs, NotYet):
         self._lock = threading.Lock()
         self._settled = False
         self._subscriptions: list[Any] = []
+
+    @property
+    def types(self) -> TypeSupport:
+        """rosbags' store for the distro (made on first use: listing verbs never need it)."""
+        if self._types is None:
+            from rostool.graph.ros2.types import TypeSupport
+
+            self._types = TypeSupport(self._distro, self._interface_paths)
+        return self._types
 
     @property
     def context(self) -> RclpyContext:

@@ -55,10 +55,3 @@ class RclpyParameters(NodeParameters):
             f"unknown node {self.node}: no ROS 2 participant serves its parameter services "
             "(see `rostool node list`)"
         )
-
-
-class ParameterVerbs:
-    def parameters(self: RclpyGraph, node: str | None, timeout: float = 5.0) -> RclpyParameters:
-        if node is None:
-            raise RostoolError("ROS 2 parameters belong to nodes: give the NODE first")
-        return RclpyParameters(self, node, timeout)

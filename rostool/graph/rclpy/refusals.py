@@ -3,11 +3,16 @@
 from __future__ import annotations
 
 from rostool.errors import RostoolError
-from rostool.graph.ros2.protocol import ros1_only
 
 
 def not_yet(what: str) -> RostoolError:
     return RostoolError(f"{what} is not available with the rclpy backend yet; use --ros2-backend dds")
+
+
+def ros1_only(what: str) -> RostoolError:
+    from rostool.graph.ros2.protocol import ros1_only as dds_line  # the DDS backend's line
+
+    return dds_line(what)
 
 
 class NotYet:
