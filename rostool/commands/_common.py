@@ -14,8 +14,11 @@ if TYPE_CHECKING:
 
 
 def ros_version(ctx: click.Context) -> int | None:
-    settings = ctx.find_root().obj
-    return getattr(settings, "ros_version", None)
+    root = ctx.find_root()
+    if root.obj is None:  # shell completion parses the root's options without running its callback
+        value = root.params.get("ros_version")
+        return value if value in (1, 2) else None
+    return getattr(root.obj, "ros_version", None)
 
 
 def interface_style(ctx: click.Context, type_name: str = "") -> Literal["ros1", "ros2"]:
