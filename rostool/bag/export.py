@@ -90,6 +90,8 @@ def export_bag(
             if options.topics and not wanted:
                 return result
         conns = reader.select(wanted)
+        if options.fmt is None or options.out is None:  # images only: decode nothing else
+            conns = [conn for conn in conns if conn.msgtype in IMAGE_TYPES]
         style = "ros1" if reader.ros_version == 1 else "ros2"
         tables: dict[str, _Table] = {}
         images: dict[str, Any] = {}

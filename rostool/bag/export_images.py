@@ -119,7 +119,8 @@ class _Mp4:
 
         path.parent.mkdir(parents=True, exist_ok=True)
         self.container = av.open(str(path), mode="w")
-        self.stream = self.container.add_stream("libx264", rate=30)
+        codec = "libx264" if "libx264" in av.codecs_available else "mpeg4"  # mpeg4 is FFmpeg's own
+        self.stream = self.container.add_stream(codec, rate=30)
         self.stream.width, self.stream.height = size[0] + size[0] % 2, size[1] + size[1] % 2
         self.stream.pix_fmt = "yuv420p"
         self.stream.time_base = Fraction(1, 1000)
