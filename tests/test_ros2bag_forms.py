@@ -238,3 +238,38 @@ def test_play_start_offset_and_playback_duration(start_peer: Peer, graph_env: di
 def test_play_refuses_a_storage_that_is_not_the_bag_s() -> None:
     result = rostool(["--ros2", "bag", "play", "-s", "sqlite3", str(ROS2 / "talker_mcap")], ros2_env())
     assert result.returncode != 0 and "-s sqlite3 given, but the bag's storage is mcap" in result.stderr
+
+
+def test_record_split_by_size_keeps_max_bag_files_compressed(
+    start_peer: Peer, graph_env: dict[str, str], tmp_path: Path
+) -> None:
+    """-b BYTES --max-bag-files N --compression-mode file: N zstd files remain, listed in metadata.yaml."""
+    start_peer("--talk", "/chatter", "--rate", "50")
+    args = ["--topics", "/chatter", "-s", "sqlite3", "-o", "ring", "-b", "600", "--max-bag-files", "2"]
+    _record([*args, "--compression-mode", "file", "--compression-format", "zstd"], graph_env, tmp_path, 4.0)
+    bag = tmp_path / "ring"
+    files = sorted(p.name for p in bag.iterdir() if p.name != "metadata.yaml")
+    assert len(files) == 2 and all(f.startswith("ring_") and f.endswith(".db3.zstd") for f in files), files
+    assert files[0] != "ring_0.db3.zstd"  # the oldest were deleted
+    meta = yaml.safe_load((bag / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
+    assert sorted(meta["relative_file_paths"]) == files and meta["compression_mode"] == "FILE"
+    assert len(read_rosbags(bag)["/chatter"]) == meta["message_count"] > 0
+
+
+def test_record_use_sim_time_stamps_with_clock(
+    start_peer: Peer, graph_env: dict[str, str], tmp_path: Path
+) -> None:
+    """--use-sim-time: the stored receive times are /clock's (here 1000 s), not the wall clock."""
+    start_peer("--talk", "/chatter", "--rate", "20")
+    clock = rostool_popen(
+        ["topic", "pub", "/clock", "rosgraph_msgs/msg/Clock", "{clock: {sec: 1000}}", "-r", "20"], graph_env
+    )
+    try:
+        _record(["--topics", "/chatter", "--use-sim-time", "-o", "sim"], graph_env, tmp_path, 4.0)
+    finally:
+        stop(clock)
+    from rosbags.highlevel import AnyReader
+
+    with AnyReader([tmp_path / "sim"]) as reader:
+        stamps = [stamp for _conn, stamp, _raw in reader.messages()]
+    assert stamps and all(stamp == 1000 * 10**9 for stamp in stamps)

@@ -335,7 +335,9 @@ class Ros2Sink:
         produced = self.active / f"{self.active.name}.{self.fmt}"
         if not produced.exists():  # file compression: NAME.mcap.zstd
             produced = next(self.active.glob(f"{self.active.name}.{self.fmt}.*"), produced)
-            self.final = self.final.with_name(self.final.name + produced.name[len(self.active.name) + 4 :])
+            self.final = self.final.with_name(
+                self.final.name + produced.name[len(self.active.name) + len(self.fmt) + 1 :]
+            )
         os.replace(produced, self.final)
         shutil.rmtree(self.active, ignore_errors=True)
 
