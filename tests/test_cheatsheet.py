@@ -711,3 +711,26 @@ def test_unbuilt_groups_hide_the_ros2_form_too() -> None:
     assert param_get.planned_rostool_ros2 == "rostool --ros2 param get <node> <name>"
     assert topic_echo is not None
     assert topic_echo.rostool_ros2 == "rostool --ros2 topic echo <topic> --qos-reliability best_effort"
+
+
+def test_a_concept_finds_the_cli_form_before_the_python_api(reference: Reference) -> None:
+    hits = [hit.entry for hit in search(reference, "feedback").hits]
+    first_code = next(i for i, e in enumerate(hits) if e.section == "python")
+    assert first_code > 0 and hits[0].section == "actions", [e.ros1 for e in hits]
+    assert any("send-goal --feedback" in (e.rostool_ros2 or "") for e in hits[:first_code])
+    # the function's own name still finds the function first
+    assert search(reference, "publish_feedback").hits[0].entry.ros1 == "server.publish_feedback(feedback)"
+
+
+def test_interface_rows_use_the_interface_group(reference: Reference) -> None:
+    forms = {
+        "rosmsg show <type>": "rostool --ros2 interface show <pkg>/msg/<Type>",
+        "rossrv show <type>": "rostool --ros2 interface show <pkg>/srv/<Type>",
+        "rosmsg list": "rostool --ros2 interface list -m",
+        "rossrv list": "rostool --ros2 interface list -s",
+        "rosmsg package <pkg>": "rostool --ros2 interface package <pkg>",
+    }
+    for ros1, ros2_form in forms.items():
+        assert reference.entry(ros1).rostool_ros2 == ros2_form, ros1
+    hit = search(reference, "ros2 interface package", column="ros2").hits[0].entry
+    assert hit.rostool_ros2 == "rostool --ros2 interface package <pkg>"

@@ -187,7 +187,10 @@ def _score_form(
     best = 0.0
     if form_code and query_code and _code_key(query_norm) == _code_key(text_norm):
         best = CODE_KEY + offset
-    if identifier and (code_like or (own and form_code)) and _contains_identifier(text_norm, identifier):
+    # A bare word (`feedback`) names a function only by the called name, never by an argument in it:
+    # else `publish_feedback(feedback)` would outrank every command that is about feedback.
+    named = text_norm if code_like else _code_key(text_norm)
+    if identifier and (code_like or (own and form_code)) and _contains_identifier(named, identifier):
         best = max(best, IDENTIFIER + offset)
     if not form_code and not query_code:
         key = command_key(text)

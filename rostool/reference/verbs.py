@@ -17,8 +17,9 @@ PLANNED_TREE: Mapping[str, frozenset[str] | None] = {
     "param": frozenset({"list", "get", "set", "describe", "delete", "dump", "load"}),
     "msg": frozenset({"show", "list", "md5"}),
     "srv": frozenset({"show", "list"}),
-    "service": frozenset({"list", "type", "info", "uri", "find", "call"}),
-    "action": frozenset({"list", "info", "send-goal", "cancel"}),
+    "interface": frozenset({"list", "package", "packages", "proto", "show"}),
+    "service": frozenset({"list", "type", "info", "uri", "find", "call", "echo"}),
+    "action": frozenset({"list", "info", "type", "find", "send-goal", "send_goal", "cancel"}),
     "bag": frozenset({"info", "play", "record", "convert", "echo", "filter", "reindex"}),
     "cheatsheet": None,
 }
