@@ -13,6 +13,7 @@ from __future__ import annotations
 import csv
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from operator import attrgetter
 from pathlib import Path
 from typing import Any, Literal
 
@@ -181,7 +182,6 @@ class _Table:
         self.partial = path.with_name(path.name + ".partial")
         self.batch_rows = options.batch_rows
         self.batch_bytes = options.batch_bytes
-        self._getters = [column.get for column in columns[1:]]
         self._times: list[int] = []
         self._messages: list[object] = []
         self._bytes = 0
@@ -197,10 +197,22 @@ class _Table:
             self.flush()
 
     def flush(self) -> None:
-        """Columns are taken from the buffered messages a batch at a time (faster than per message)."""
+        """Columns are taken from a batch of buffered messages, each attribute once per message: columns
+        under one parent (`pose.position.x`, `.y`, `.z`) share the parent's list."""
         if self._times:
-            messages = self._messages
-            self.sink.write([self._times, *([get(msg) for msg in messages] for get in self._getters)])
+            lists: dict[tuple[str, ...], list[Any]] = {(): self._messages}
+
+            def values(path: tuple[str, ...]) -> list[Any]:
+                found = lists.get(path)
+                if found is None:
+                    found = lists[path] = list(map(attrgetter(path[-1]), values(path[:-1])))
+                return found
+
+            columns: list[list[Any]] = [self._times]
+            for column in self.columns[1:]:
+                got = values(column.path)
+                columns.append(got if column.convert is None else list(map(column.convert, got)))
+            self.sink.write(columns)
         self._times, self._messages, self._bytes = [], [], 0
 
     def close(self) -> Path:

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from operator import attrgetter
 from typing import Any
 
 from rostool.output.plain import TIME_TYPES, TimeStyle
@@ -33,9 +32,13 @@ STAMP_COLUMN = "stamp"
 
 @dataclass(frozen=True)
 class Column:
+    """`path`: the attributes from the message to the value; `convert` turns that value into one pyarrow
+    takes for `spec` (bytes, lists, dicts), None when it already is one."""
+
     name: str
     spec: Spec
-    get: Callable[[object], Any]  # message -> a value pyarrow takes for `spec` (bytes, lists, dicts)
+    path: tuple[str, ...]
+    convert: Callable[[Any], Any] | None = None
 
 
 class TypePlan:
@@ -75,36 +78,33 @@ class TypePlan:
         fields = self.fields(msgtype)
         names = {name for name, _ in fields}
         time_name = TIME_COLUMN if TIME_COLUMN not in names else f"_{TIME_COLUMN}"
-        columns = [Column(time_name, "int64", _never)]
+        columns = [Column(time_name, "int64", ())]  # the receive time: not a message field
         header = next((desc for name, desc in fields if name == "header"), None)
         if header == (2, HEADER):
             stamp_name = STAMP_COLUMN if STAMP_COLUMN not in names else f"_{STAMP_COLUMN}"
-            columns.append(Column(stamp_name, "int64", _stamp_ns))
+            columns.append(Column(stamp_name, "int64", ("header", "stamp"), _stamp_ns))
         for name, desc in fields:
             columns.extend(self._flat(name, desc))
         return columns
 
     def _flat(self, path: str, desc: Any) -> list[Column]:
         kind, rest = desc
+        names = tuple(path.split("."))
         if kind == 2 and rest in TIME_TYPES:
             sec, nanosec = self._time_names
             return [
-                Column(f"{path}.{sec}", "int32", attrgetter(f"{path}.sec")),
-                Column(f"{path}.{nanosec}", "uint32", attrgetter(f"{path}.nanosec")),
+                Column(f"{path}.{sec}", "int32", (*names, "sec")),
+                Column(f"{path}.{nanosec}", "uint32", (*names, "nanosec")),
             ]
         if kind == 2:
             return [column for name, sub in self.fields(rest) for column in self._flat(f"{path}.{name}", sub)]
-        get = attrgetter(path)
         spec = self.spec(desc)
         if spec == "binary":
-            return [Column(path, spec, lambda msg: _bytes(get(msg)))]
-        if kind == 1:
-            return [Column(path, spec, get)]
-        element = rest[0]
-        if element[0] == 1:  # numpy arrays and lists of primitives go to pyarrow as they are
-            return [Column(path, spec, get)]
+            return [Column(path, spec, names, _bytes)]
+        if kind == 1 or rest[0][0] == 1:  # numpy arrays and lists of primitives go to pyarrow as they are
+            return [Column(path, spec, names)]
         plain = self.plain
-        return [Column(path, spec, lambda msg: [plain(item) for item in get(msg)])]
+        return [Column(path, spec, names, lambda items: [plain(item) for item in items])]
 
     def plain(self, value: Any) -> Any:
         """A nested message as the dict pyarrow takes for its struct (byte arrays as bytes)."""
@@ -128,12 +128,7 @@ class TypePlan:
         return out
 
 
-def _never(msg: object) -> Any:
-    raise AssertionError("the receive time is not a message field")
-
-
-def _stamp_ns(msg: Any) -> int:
-    stamp = msg.header.stamp
+def _stamp_ns(stamp: Any) -> int:
     return int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec)
 
 
