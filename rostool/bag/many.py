@@ -49,6 +49,13 @@ def is_one_bag(path: Path) -> bool:
 
 def expand(paths: Sequence[str | Path]) -> list[BagItem]:
     """The bags that PATHs name, in order; names unique (the file stem, or the path below a directory)."""
+    try:
+        return _expand(paths)
+    except OSError as err:
+        raise RostoolError(f"{err.filename or paths[0]}: cannot read: {err.strerror or err}") from err
+
+
+def _expand(paths: Sequence[str | Path]) -> list[BagItem]:
     found: list[tuple[Path, str]] = []
     for given in paths:
         path = Path(given)
