@@ -81,13 +81,11 @@ def test_info_split_bag_lists_every_file() -> None:
 def test_info_topic_names_and_verbose_services() -> None:
     """ros2bag test_info.py: `info --topic-name empty_bag` prints "/parameter_events\\n/rosout\\n"; -v
     counts requests and responses per service."""
-    from rostool.bag.info import bag_info
-    from rostool.bag.rosbag2_info import count_service_events, format_ros2, topic_names
+    from rostool.bag.info import bag_info, format_text
 
-    assert topic_names(bag_info(ROS2 / "empty_bag_sqlite3")) + "\n" == "/parameter_events\n/rosout\n"
-    events = ROS2 / "service_events_sqlite3"
-    info = bag_info(events)
-    text = format_ros2(info, verbose=True, service_counts=count_service_events(str(events), info))
+    empty = format_text(bag_info(ROS2 / "empty_bag_sqlite3"), topic_name=True)
+    assert empty + "\n" == "/parameter_events\n/rosout\n"
+    text = format_text(bag_info(ROS2 / "service_events_sqlite3"), verbose=True)
     assert (
         "Service information: Service: /test_service1 | Type: test_msgs/srv/BasicTypes | Request Count: 2 | "
         "Response Count: 2 | Serialization Format: cdr"
@@ -273,3 +271,27 @@ def test_record_use_sim_time_stamps_with_clock(
     with AnyReader([tmp_path / "sim"]) as reader:
         stamps = [stamp for _conn, stamp, _raw in reader.messages()]
     assert stamps and all(stamp == 1000 * 10**9 for stamp in stamps)
+
+
+def test_bag_without_definitions_decodes_with_a_sourced_ros2(tmp_path: Path) -> None:
+    """A rosbag2 bag that stores no definition of test_msgs/msg/BasicTypes decodes where the package is
+    installed (AMENT_PREFIX_PATH of the Jazzy peer venv, which has ros-jazzy-test-msgs), as ros2 bag does."""
+    import shutil
+    import sqlite3
+
+    from tests.ros2_peers import PEERS_DIR, peer_python
+
+    peer_python("jazzy")  # fails in CI, skips elsewhere, without the venv
+    bag = tmp_path / "nodef"
+    shutil.copytree(ROS2 / "cdr_test_sqlite3", bag)
+    with sqlite3.connect(bag / "cdr_test_0.db3") as db:
+        db.execute("DELETE FROM message_definitions")
+    env = ros2_env()
+    env.pop("AMENT_PREFIX_PATH", None)
+    blind = rostool(["bag", "echo", str(bag), "/test_topic", "-n", "1"], env, cwd=tmp_path)
+    assert blind.returncode != 0 and "cannot decode test_msgs/msg/BasicTypes" in blind.stderr
+    assert (PEERS_DIR / "jazzy" / "share" / "test_msgs" / "msg" / "BasicTypes.msg").exists()
+    env["AMENT_PREFIX_PATH"] = str(PEERS_DIR / "jazzy")
+    sourced = rostool(["bag", "echo", str(bag), "/test_topic", "-n", "1", "--json"], env, cwd=tmp_path)
+    assert sourced.returncode == 0, sourced.stderr
+    assert '"int32_value": 123' in sourced.stdout

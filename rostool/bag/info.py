@@ -477,13 +477,19 @@ def _duration(duration: float) -> str:
     return f"{duration:.1f}s"
 
 
-def format_text(info: BagInfo) -> str:
+def format_text(info: BagInfo, verbose: bool = False, topic_name: bool = False) -> str:
     """Human output laid out as the bag's own tool prints it: `rosbag info` for ROS 1 bags, `ros2 bag
-    info` for rosbag2 directories, .mcap and .db3 files (see `rosbag2_info.format_ros2`)."""
-    if info.ros_version == 2:
-        from rostool.bag.rosbag2_info import format_ros2
+    info` for rosbag2 directories, .mcap and .db3 files (see `rosbag2_info.format_ros2`).
 
-        return format_ros2(info)
+    `topic_name`: only the topic names, one a line (`ros2 bag info -t`); `verbose`: ROS 2 bags count the
+    requests and responses of each service (`ros2 bag info -v`, reads the service event messages)."""
+    from rostool.bag import rosbag2_info
+
+    if topic_name:
+        return rosbag2_info.topic_names(info)
+    if info.ros_version == 2:
+        counts = rosbag2_info.count_service_events(info.path, info) if verbose else None
+        return rosbag2_info.format_ros2(info, verbose, counts)
     return format_rosbag(info)
 
 

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
+from typing import Any
 
 from rosbags.interfaces import Nodetype
 from rosbags.typesys import Stores, get_types_from_idl, get_types_from_msg, get_typestore
@@ -124,12 +125,15 @@ class TypeResolver:
         self.unknown: set[str] = set()
         self._from_builtin: set[str] = set()
         self._stored = stored
+        self._sources: Any = None  # rostool.graph.ros2.definitions.SourceDefinitions, made when needed
         for msgtype in sorted(set(msgtypes)):
             typs = self._stored_types_for(msgtype, stored)
             if typs is not None:
                 self._stored_types[msgtype] = typs
             elif ros_version == 2 and msgtype in self.builtin.fielddefs:
                 self._from_builtin.add(msgtype)
+            elif ros_version == 2 and (found := self._from_sources(msgtype)) is not None:
+                self._stored_types[msgtype] = found
             else:
                 self.unknown.add(msgtype)
         self.store = self._build()
@@ -148,6 +152,29 @@ class TypeResolver:
             if name in self._stored:
                 return self._stored[name].text
         raise RostoolError(self.missing_message(msgtype))
+
+    def _from_sources(self, msgtype: str) -> Typesdict | None:
+        """A type neither stored nor built in, from the .msg/.srv files the live verbs read:
+        ROSTOOL_INTERFACES (--interfaces), ROS_PACKAGE_PATH, the workspace around the current folder and
+        AMENT_PREFIX_PATH's share/ (a sourced ROS 2 has its packages' interface files there)."""
+        from rostool.graph import interface_paths_from_env
+        from rostool.graph.ros2.definitions import SourceDefinitions
+
+        if self._sources is None:
+            self._sources = SourceDefinitions(interface_paths_from_env())
+        known = self.builtin.fielddefs
+        try:
+            typs = self._sources.load(msgtype, lambda name: name in known)
+        except Exception:  # an unreadable or broken source file: the type stays unknown
+            return None
+        if typs is None:
+            return None
+        found: Typesdict = dict(typs)  # type: ignore[arg-type]
+        base = get_typestore(Stores.EMPTY).fielddefs
+        for name in _closure(found, msgtype, {**base, **known}) or ():
+            if name not in found and name not in base and name in known:
+                found[name] = known[name]  # type: ignore[assignment]
+        return found
 
     def _stored_types_for(self, msgtype: str, stored: Mapping[str, StoredDefinition]) -> Typesdict | None:
         definition = stored.get(msgtype)
@@ -252,7 +279,10 @@ class TypeResolver:
     def missing_message(self, msgtype: str) -> str:
         where = "the bag stores no definition for it"
         if self.ros_version == 2:
-            where += f" and the {self.distro} built-in type store lacks it (try --distro)"
+            where += (
+                f", the {self.distro} built-in type store lacks it (try --distro) and no .msg file defines "
+                "it (source the ROS 2 setup that has its package: AMENT_PREFIX_PATH, or ROSTOOL_INTERFACES)"
+            )
         return f"cannot decode {msgtype}: {where}"
 
     def _fall_back(self, msgtype: str) -> bool:
