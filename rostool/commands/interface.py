@@ -155,12 +155,13 @@ def _read_type_name(type_name: str) -> str:
 
 @interface.command("show")
 @click.argument("type_name", metavar="TYPE|-")
-@click.option("--all-comments", is_flag=True, help="Accepted; rostool prints definitions without comments.")
-@click.option("--no-comments", is_flag=True, help="Print no comments (what rostool prints anyway).")
+@click.option("--all-comments", is_flag=True, help="Also the comments of nested types.")
+@click.option("--no-comments", is_flag=True, help="No comments and no blank lines.")
 @interfaces_option
 def show(type_name: str, all_comments: bool, no_comments: bool, interface_paths: tuple[str, ...]) -> None:
     """Print a message, service or action type with its nested types expanded ("-": the name is read from
-    stdin). rostool prints the fields and constants as `ros2 interface show --no-comments` does.
+    stdin), with the definition file's comments as ros2 interface show prints them. Types rostool knows
+    only from rosbags' store (no file) print without comments, as --no-comments.
 
     \b
     Examples:
@@ -168,13 +169,15 @@ def show(type_name: str, all_comments: bool, no_comments: bool, interface_paths:
       rostool interface show example_interfaces/srv/AddTwoInts
       rostool interface show test_msgs/action/Fibonacci --interfaces ~/ros2_ws/src
     """
-    from rostool.interfaces.describe_ros2 import kind_of, show_text
+    from rostool.interfaces.describe_ros2 import commented_text, kind_of, show_text
 
     if all_comments and no_comments:
         raise RostoolError("give --all-comments or --no-comments, not both")
     name = _read_type_name(type_name)
     _check_known(_catalog(interface_paths), name)
-    click.echo(show_text(name, kind_of(name) or "msg", interface_paths), nl=False)
+    kind = kind_of(name) or "msg"
+    text = None if no_comments else commented_text(name, kind, interface_paths, all_comments)
+    click.echo(text if text is not None else show_text(name, kind, interface_paths), nl=False)
 
 
 @interface.command("proto")

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
@@ -211,3 +212,71 @@ def _block(catalog: Ros2Interfaces, type_name: str, kind: str, raw: bool) -> str
         return text if text.endswith("\n") or not text else text + "\n"
     lines = catalog.show_lines(type_name, kind)
     return "".join(f"{line}\n" for line in lines)
+
+
+# --- show with comments (the definition files as written) -------------------------------------------------
+
+_PRIMITIVES = frozenset(
+    {"bool", "byte", "char", "float32", "float64", "int8", "uint8", "int16", "uint16", "int32", "uint32"}
+    | {"int64", "uint64", "string", "wstring"}
+)
+_TRAILING_COMMENT = re.compile(r"\s#")
+
+
+def commented_text(
+    type_name: str, kind: str, interface_paths: Sequence[str] = (), all_comments: bool = False
+) -> str | None:
+    """What `ros2 interface show` prints from the definition file: its comments and blank lines, nested
+    types expanded one tab deeper (their comments too with `all_comments`). None when rostool has no text
+    for the type (rosbags' store keeps none): the caller prints the rebuilt definition instead."""
+    catalog = Ros2Interfaces(interface_paths)
+    name = type_name.strip().strip("/")
+    if "/" not in name:
+        return None
+    text = catalog.raw_text(name, kind_of(name) or kind)
+    if text is None:
+        return None
+    lines = _commented(catalog, text, name.split("/")[0], 0, all_comments)
+    return "".join(f"{line}\n" for line in lines)
+
+
+def _commented(catalog: Ros2Interfaces, text: str, package: str, level: int, all_comments: bool) -> list[str]:
+    if level > _MAX_DEPTH:
+        raise RostoolError(f"a type of {package} nests itself deeper than {_MAX_DEPTH} levels")
+    indent, comments = "\t" * level, level == 0 or all_comments
+    lines: list[str] = []
+    for raw in text.splitlines():
+        line = raw.strip()
+        if line == "---" and level == 0:
+            lines.append(line)
+        elif not line or line.startswith("#"):
+            if comments:
+                lines.append(indent + line if line else "")
+        else:
+            code = _TRAILING_COMMENT.split(line, maxsplit=1)[0].rstrip()
+            lines.append(indent + (line if comments else code))
+            nested = _nested_type(code, package)
+            if nested is not None:
+                lines.extend(_nested_lines(catalog, nested, level + 1, all_comments))
+    return lines
+
+
+def _nested_type(code: str, package: str) -> str | None:
+    """The message type a field line names (`pkg/msg/T`), or None for primitives and constants."""
+    words = code.split()
+    if len(words) < 2 or "=" in words[1] or (len(words) > 2 and words[2].startswith("=")):
+        return None
+    base = re.sub(r"\[[^\]]*\]$", "", words[0]).split("<=")[0]
+    if base in _PRIMITIVES:
+        return None
+    parts = base.split("/")
+    if len(parts) == 3:
+        return base
+    return f"{parts[0]}/msg/{parts[1]}" if len(parts) == 2 else f"{package}/msg/{base}"
+
+
+def _nested_lines(catalog: Ros2Interfaces, store_name: str, level: int, all_comments: bool) -> list[str]:
+    text = catalog.raw_text(store_name, "msg")
+    if text is None:
+        return describe_ros2(catalog.types, catalog.message(store_name), level)
+    return _commented(catalog, text, store_name.split("/")[0], level, all_comments)
