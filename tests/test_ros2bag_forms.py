@@ -295,3 +295,60 @@ def test_bag_without_definitions_decodes_with_a_sourced_ros2(tmp_path: Path) -> 
     sourced = rostool(["bag", "echo", str(bag), "/test_topic", "-n", "1", "--json"], env, cwd=tmp_path)
     assert sourced.returncode == 0, sourced.stderr
     assert '"int32_value": 123' in sourced.stdout
+
+
+def test_record_filters_types_exclusions_regex_and_custom_data(
+    start_peer: Peer, graph_env: dict[str, str], tmp_path: Path
+) -> None:
+    """ros2bag test_recorder_args_parser's lists, recorded for real: --topic-types T, --custom-data K=V K=V,
+    -a --exclude-topics T, -e RE (a name containing RE)."""
+    start_peer("--talk", "/chatter", "--rate", "20")
+    start_peer("--stamped", "/point", "--rate", "20")
+    typed = [
+        "--topic-types",
+        "std_msgs/msg/String",
+        "--custom-data",
+        "Key1=Value1",
+        "key2=value2",
+        "-o",
+        "typed",
+    ]
+    _record(typed, graph_env, tmp_path, 3.0)
+    _record(["-a", "--exclude-topics", "/chatter", "-o", "excluded"], graph_env, tmp_path, 3.0)
+    _record(["-e", "oin", "-o", "regex"], graph_env, tmp_path, 3.0)
+    assert set(read_rosbags(tmp_path / "typed")) == {"/chatter"}
+    meta = yaml.safe_load((tmp_path / "typed" / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
+    assert meta["custom_data"] == {"Key1": "Value1", "key2": "value2"}
+    excluded = set(read_rosbags(tmp_path / "excluded"))
+    assert "/point" in excluded and "/chatter" not in excluded
+    assert set(read_rosbags(tmp_path / "regex")) == {"/point"}
+
+
+def test_play_lists_in_one_value_exclusions_and_clock_topics(
+    start_peer: Peer, graph_env: dict[str, str]
+) -> None:
+    """ros2bag test_player_args_parser: `--topics 'topic1 topic2'`, `--exclude-topics`, `--remap 'a:=b c:=d'`
+    and `--clock-topics T` (each /topic message's time on /clock), played into a real listener."""
+    from rostool.bag.reader import BagReader
+
+    listener = start_peer("--listen", "/talk")
+    clock = rostool_popen(["topic", "echo", "/clock", "rosgraph_msgs/msg/Clock", "--json"], graph_env)
+    try:
+        play = [
+            "--ros2", "bag", "play", str(ROS2 / "talker_mcap"), "--topics", "/topic /rosout",
+            "--exclude-topics", "/rosout", "--remap", "/topic:=/talk /rosout:=/log",
+            "--clock-topics", "/topic", "-d", "2",
+        ]  # fmt: skip
+        result = rostool(play, graph_env, timeout=60)
+        assert result.returncode == 0, result.stderr
+        assert wait_until(lambda: len(listener.of("heard")) >= 10, timeout=10)
+        time.sleep(0.5)
+    finally:
+        out, _err = stop(clock)
+    assert [e["data"] for e in listener.of("heard")] == [f"Hello, world! {i}" for i in range(10)]
+    with BagReader([ROS2 / "talker_mcap"]) as reader:
+        stamps = [stamp for _c, stamp, _raw in reader.messages(reader.select(["/topic"]))]
+    import json
+
+    clocks = [json.loads(line)["clock"] for line in out.splitlines() if line.startswith("{")]
+    assert [c["sec"] * 10**9 + c["nanosec"] for c in clocks] == stamps

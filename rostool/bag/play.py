@@ -69,6 +69,8 @@ class PlayOptions:
     regex: str | None = None  # play only topics whose name contains a match
     exclude_regex: str | None = None  # leave out topics whose name contains a match
     until: float | None = None  # bag time (seconds since the epoch) where playing ends
+    clock_topics: Sequence[str] = ()  # bag topics whose messages' times are also published on /clock
+    clock_topics_all: bool = False  # every message's time is published on /clock
 
 
 @dataclass
@@ -104,6 +106,7 @@ class _Plan:
     # Decodes a converted message with the graph's own type; dropped once the first one passed.
     verify: Callable[[Any], object] | None = None
     pause: bool = False  # a --pause-topics topic
+    clock: bool = False  # publish this message's time on /clock (ros2 bag play --clock-topics)
 
 
 def parse_remaps(values: Collection[str]) -> dict[str, str]:
@@ -270,7 +273,7 @@ class Player:
             return
         for topic, why in self.result.skipped.items():  # only now: no warning before that error
             self.warn(f"skipping {topic}: {why}")
-        if self.options.clock:
+        if self.options.clock or self.options.clock_topics or self.options.clock_topics_all:
             self._clock_pub = self._advertise_clock()
 
     def _plan(self, conn: Connection) -> None:
@@ -293,7 +296,8 @@ class Player:
             publisher = kind.advertise(topic)
             self._publishers[topic] = (publisher, kind.key)
         pause = conn.topic in self.pause_topics
-        self._plans[id(conn)] = _Plan(topic, publisher, kind.convert, kind.verify, pause)
+        clock = options.clock_topics_all or conn.topic in options.clock_topics
+        self._plans[id(conn)] = _Plan(topic, publisher, kind.convert, kind.verify, pause, clock)
 
     def _kind_of(self, conn: Connection) -> _Kind:
         msg_type, convert, latch = self._type_of(conn)
@@ -407,9 +411,9 @@ class Player:
                 self._started = True
             wait(stamp, plan.pause)
             if clock_pub is not None:
-                if self.clock_per_message:
+                if self.clock_per_message or plan.clock:
                     clock_pub.publish_raw(self._clock_message(stamp))
-                else:
+                elif self.options.clock:
                     self._tick_clock(time.perf_counter())  # behind schedule, _wait returns before ticking
             plan.publisher.publish_raw(payload)
             published += 1
@@ -439,7 +443,7 @@ class Player:
             if now >= due:
                 return
             deadline = min(due, self._next_ui)
-            if clock_pub is not None:
+            if clock_pub is not None and self.options.clock:
                 if now >= self._next_tick:
                     self._tick_clock(now)
                 deadline = min(deadline, self._next_tick)
@@ -447,7 +451,7 @@ class Player:
 
     def _tick_clock(self, now: float) -> None:
         publisher = self._clock_pub
-        if publisher is None or not self._started or now < self._next_tick:
+        if publisher is None or not self.options.clock or not self._started or now < self._next_tick:
             return
         publisher.publish_raw(self._clock_message(self.clock.bag_time(now)))
         period = 1.0 / self.options.hz

@@ -507,9 +507,12 @@ PLAY_LISTS = (
 @click.option("--clock", type=click.FloatRange(min=0, min_open=True), metavar="[HZ]",
               help="Publish /clock at HZ (alone: 40), as a ROS time source.")  # fmt: skip
 @click.option(
-    "--clock-topics", multiple=True, metavar="TOPIC...", help="Not supported yet (one line says so)."
+    "--clock-topics",
+    multiple=True,
+    metavar="TOPIC...",
+    help="Publish the time of each message on these topics to /clock.",
 )
-@click.option("--clock-topics-all", is_flag=True, help="Not supported yet (one line says so).")
+@click.option("--clock-topics-all", is_flag=True, help="Publish the time of every message to /clock.")
 @click.option("-d", "--delay", type=click.FloatRange(min=0), default=0.0, metavar="S",
               help="Sleep S seconds before playing.")  # fmt: skip
 @click.option("--playback-duration", type=click.FloatRange(min=0, min_open=True), metavar="S",
@@ -562,8 +565,6 @@ def play(ctx: click.Context, **opts: Any) -> None:
     from rostool.bag.reader import BagReader
     from rostool.commands._common import live_graph
 
-    if opts["clock_topics"] or opts["clock_topics_all"]:
-        raise RostoolError("--clock-topics/--clock-topics-all are not supported yet; use --clock [HZ]")
     until = opts["playback_until_sec"]
     if opts["playback_until_nsec"] is not None:
         if until is not None:
@@ -600,6 +601,8 @@ def play(ctx: click.Context, **opts: Any) -> None:
         regex=opts["regex"] or None,
         exclude_regex=opts["exclude_regex"] or None,
         until=until,
+        clock_topics=_names(opts["clock_topics"]),
+        clock_topics_all=opts["clock_topics_all"],
     )
     quiet = opts["quiet"]
     warn: Callable[[str], None] = (
