@@ -19,10 +19,10 @@ import os
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import BinaryIO
+from typing import Any, BinaryIO
 
 from rostool.bag import ros1_format as fmt
-from rostool.bag.open import detect
+from rostool.bag.open import describe, detect
 from rostool.errors import RostoolError
 
 
@@ -282,8 +282,7 @@ def mcap_complete(path: Path) -> bool:
 
 
 def reindex_mcap(path: Path, tmp: Path) -> tuple[int, int, bool]:
-    from mcap.exceptions import McapError
-    from mcap.records import Attachment, Channel, Header, Message, Metadata, Schema
+    from mcap.records import Header
     from mcap.stream_reader import StreamReader
     from mcap.writer import CompressionType, Writer
 
@@ -293,40 +292,56 @@ def reindex_mcap(path: Path, tmp: Path) -> tuple[int, int, bool]:
         writer: Writer | None = None
         schemas: dict[int, int] = {}
         channels: dict[int, int] = {}
-        reader = StreamReader(source)
-        try:
-            for record in reader.records:
-                if isinstance(record, Header):
+        records = iter(StreamReader(source).records)
+        while True:
+            try:
+                record = next(records)
+            except StopIteration:
+                break
+            except (
+                Exception
+            ):  # whatever a cut-short or damaged tail makes the parser raise: keep what came before
+                truncated = True
+                break
+            if isinstance(record, Header):
+                if writer is None:
                     writer = Writer(out, compression=CompressionType.ZSTD)
                     writer.start(record.profile, record.library or "rostool")
-                    continue
-                if writer is None:
-                    raise RostoolError(f"{path}: no mcap header record")
-                if isinstance(record, Schema) and record.id not in schemas:
-                    schemas[record.id] = writer.register_schema(record.name, record.encoding, record.data)
-                elif isinstance(record, Channel) and record.id not in channels:
-                    schema = schemas.get(record.schema_id, 0)
-                    channels[record.id] = writer.register_channel(
-                        record.topic, record.message_encoding, schema, record.metadata
-                    )
-                elif isinstance(record, Message) and record.channel_id in channels:
-                    writer.add_message(
-                        channels[record.channel_id],
-                        record.log_time,
-                        record.data,
-                        record.publish_time,
-                        record.sequence,
-                    )
-                    messages += 1
-                elif isinstance(record, Attachment):
-                    writer.add_attachment(
-                        record.create_time, record.log_time, record.name, record.media_type, record.data
-                    )
-                elif isinstance(record, Metadata):
-                    writer.add_metadata(record.name, record.metadata)
-        except (McapError, ValueError, EOFError, AssertionError, OSError):
-            truncated = True  # a truncated tail: keep what was complete
+                continue
+            if writer is None:
+                raise RostoolError(f"{path}: no mcap header record")
+            try:
+                messages += _copy_record(record, writer, schemas, channels)
+            except OSError:
+                raise
+            except Exception as err:  # values the parser accepted but the writer cannot write back
+                raise RostoolError(f"{path}: cannot rebuild it: {describe(err)}") from err
         if writer is None:
             raise RostoolError(f"{path}: no readable mcap header")
         writer.finish()
     return messages, 0, truncated
+
+
+def _copy_record(record: object, writer: Any, schemas: dict[int, int], channels: dict[int, int]) -> int:
+    """Write one mcap record into the new file; 1 for a message, else 0."""
+    from mcap.records import Attachment, Channel, Message, Metadata, Schema
+
+    if isinstance(record, Schema) and record.id not in schemas:
+        schemas[record.id] = writer.register_schema(record.name, record.encoding, record.data)
+    elif isinstance(record, Channel) and record.id not in channels:
+        schema = schemas.get(record.schema_id, 0)
+        channels[record.id] = writer.register_channel(
+            record.topic, record.message_encoding, schema, record.metadata
+        )
+    elif isinstance(record, Message) and record.channel_id in channels:
+        writer.add_message(
+            channels[record.channel_id], record.log_time, record.data, record.publish_time, record.sequence
+        )
+        return 1
+    elif isinstance(record, Attachment):
+        writer.add_attachment(
+            record.create_time, record.log_time, record.name, record.media_type, record.data
+        )
+    elif isinstance(record, Metadata):
+        writer.add_metadata(record.name, record.metadata)
+    return 0
