@@ -352,3 +352,54 @@ def test_play_lists_in_one_value_exclusions_and_clock_topics(
 
     clocks = [json.loads(line)["clock"] for line in out.splitlines() if line.startswith("{")]
     assert [c["sec"] * 10**9 + c["nanosec"] for c in clocks] == stamps
+
+
+QOS_PROFILE = """/test_topic:
+  history: keep_all
+  depth: 0
+  reliability: reliable
+  durability: transient_local
+  deadline:
+    sec: 0
+    nsec: 0
+  lifespan:
+    sec: 0
+    nsec: 0
+  liveliness: automatic
+  liveliness_lease_duration:
+    sec: 0
+    nsec: 0
+  avoid_ros_namespace_conventions: false
+"""
+
+
+@pytest.mark.parametrize(
+    ("profile", "error"),
+    [
+        (QOS_PROFILE, None),  # test_qos_simple
+        ("/test_topic:\n  history: keep_all\n  durability: volatile\n", None),  # test_incomplete_qos_profile
+        (  # test_incomplete_qos_duration
+            "/test_topic:\n  history: keep_all\n  depth: 0\n  reliability: reliable\n  durability: volatile\n"
+            "  deadline:\n    sec: 2\n",
+            "Time overrides must include both",
+        ),
+    ],
+)
+def test_record_qos_profile_overrides(profile: str, error: str | None, tmp_path: Path) -> None:
+    """ros2bag test_record_qos_profiles.py: `record -a --qos-profile-overrides-path FILE --output DIR`."""
+    path = tmp_path / "qos.yaml"
+    path.write_text(profile)
+    args = ["--ros2", "bag", "record", "-a", "--qos-profile-overrides-path", str(path), "--output", "out"]
+    result = rostool([*args, "--duration", "1"], ros2_env(), cwd=tmp_path)
+    if error is None:
+        assert result.returncode == 0 and (tmp_path / "out" / "metadata.yaml").exists(), result.stderr
+    else:
+        assert result.returncode != 0 and error in result.stderr and result.stderr.count("\n") == 1
+
+
+def test_record_nonexistent_qos_profile_is_refused(tmp_path: Path) -> None:
+    """test_nonexistent_qos_profile: the argument names a file that does not exist."""
+    args = ["--ros2", "bag", "record", "-a", "--qos-profile-overrides-path", str(tmp_path / "foobar.yaml")]
+    result = rostool(args, ros2_env(), cwd=tmp_path)
+    assert result.returncode != 0 and "--qos-profile-overrides-path" in result.stderr
+    assert "does not exist" in result.stderr and not list(tmp_path.iterdir())

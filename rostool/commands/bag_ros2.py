@@ -114,6 +114,14 @@ def _qos_overrides(path: str | None) -> QosRequest | None:
         raise RostoolError(
             f"--qos-profile-overrides-path {path}: expected `/topic: {{reliability: ...}}` entries"
         )
+    for topic, entry in data.items():
+        for key in ("deadline", "lifespan", "liveliness_lease_duration"):
+            value = entry.get(key)
+            if value is not None and not (isinstance(value, dict) and {"sec", "nsec"} <= value.keys()):
+                raise RostoolError(
+                    f"--qos-profile-overrides-path {path}: {topic} {key}: "
+                    "Time overrides must include both seconds and nanoseconds (sec and nsec)"
+                )
     profiles = {
         (
             str(v.get("reliability", "")).lower() or None,
