@@ -403,3 +403,23 @@ def test_record_nonexistent_qos_profile_is_refused(tmp_path: Path) -> None:
     result = rostool(args, ros2_env(), cwd=tmp_path)
     assert result.returncode != 0 and "--qos-profile-overrides-path" in result.stderr
     assert "does not exist" in result.stderr and not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize(
+    "profile", [QOS_PROFILE, "/test_topic:\n  history: keep_all\n  durability: volatile\n"]
+)
+def test_play_qos_profile_overrides_on_the_empty_bag(profile: str, tmp_path: Path) -> None:
+    """ros2bag test_play_qos_profiles.py: `play --qos-profile-overrides-path FILE empty_bag`: no error."""
+    path = tmp_path / "qos.yaml"
+    path.write_text(profile)
+    args = [
+        "--ros2",
+        "bag",
+        "play",
+        "--qos-profile-overrides-path",
+        str(path),
+        str(ROS2 / "empty_bag_sqlite3"),
+    ]
+    result = rostool(args, ros2_env(), timeout=20)
+    assert result.returncode == 0 and "rostool: warning: no message was played" in result.stderr
+    assert "Traceback" not in result.stderr and "error" not in result.stderr.lower()

@@ -100,7 +100,7 @@ def _names(values: Sequence[str]) -> list[str]:
     return [name for value in values for name in value.replace(",", " ").split()]
 
 
-def _qos_overrides(path: str | None) -> QosRequest | None:
+def _qos_overrides(path: str | None, apply: bool = True) -> QosRequest | None:
     """--qos-profile-overrides-path: rosbag2's YAML ({topic: {reliability, durability, depth, ...}})."""
     if path is None:
         return None
@@ -122,6 +122,8 @@ def _qos_overrides(path: str | None) -> QosRequest | None:
                     f"--qos-profile-overrides-path {path}: {topic} {key}: "
                     "Time overrides must include both seconds and nanoseconds (sec and nsec)"
                 )
+    if not apply:  # play: checked only; its publishers offer the QoS the bag recorded
+        return None
     profiles = {
         (
             str(v.get("reliability", "")).lower() or None,
@@ -585,6 +587,7 @@ def play(ctx: click.Context, **opts: Any) -> None:
         raise RostoolError("choose one of -u/--duration and --playback-duration")
     for bag in bags:
         _check_storage(bag, opts["storage"])
+    _qos_overrides(opts["qos_profile_overrides_path"], apply=False)
     services = {_event_topic(s) for s in _names(opts["services"])}
     options = PlayOptions(
         rate=opts["rate"],
