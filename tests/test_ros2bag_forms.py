@@ -383,6 +383,12 @@ QOS_PROFILE = """/test_topic:
             "  deadline:\n    sec: 2\n",
             "Time overrides must include both",
         ),
+        ("/test_topic:\n  foo: bar\n", "unknown QoS policy 'foo'"),  # test_api: interpret_dict invalid
+        (  # test_api test_convert_yaml_to_qos_profile: two topics, each its own fields
+            "/topic1: {history: keep_all, durability: volatile, reliability: reliable}\n"
+            "/topic2: {history: keep_all, avoid_ros_namespace_conventions: false}\n",
+            None,
+        ),
     ],
 )
 def test_record_qos_profile_overrides(profile: str, error: str | None, tmp_path: Path) -> None:

@@ -28,6 +28,10 @@ from rostool.errors import RostoolError
 from rostool.graph.qos import QosRequest
 
 CONTEXT = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
+QOS_KEYS = {
+    "history", "depth", "reliability", "durability", "deadline", "lifespan", "liveliness",
+    "liveliness_lease_duration", "avoid_ros_namespace_conventions",
+}  # fmt: skip
 HIDDEN = re.compile(r"(^|/)_")  # ROS 2 hidden names: a token starting with an underscore
 SERVICE_EVENT = "/_service_event"
 
@@ -115,6 +119,11 @@ def _qos_overrides(path: str | None, apply: bool = True) -> QosRequest | None:
             f"--qos-profile-overrides-path {path}: expected `/topic: {{reliability: ...}}` entries"
         )
     for topic, entry in data.items():
+        unknown = sorted(set(entry) - QOS_KEYS)
+        if unknown:
+            raise RostoolError(
+                f"--qos-profile-overrides-path {path}: {topic}: unknown QoS policy {unknown[0]!r}"
+            )
         for key in ("deadline", "lifespan", "liveliness_lease_duration"):
             value = entry.get(key)
             if value is not None and not (isinstance(value, dict) and {"sec", "nsec"} <= value.keys()):
@@ -124,22 +133,20 @@ def _qos_overrides(path: str | None, apply: bool = True) -> QosRequest | None:
                 )
     if not apply:  # play: checked only; its publishers offer the QoS the bag recorded
         return None
-    profiles = {
-        (
-            str(v.get("reliability", "")).lower() or None,
-            str(v.get("durability", "")).lower() or None,
-            v.get("depth"),
-        )
-        for v in data.values()
-    }
-    if len(profiles) > 1:
-        raise RostoolError(
-            f"--qos-profile-overrides-path {path}: rostool applies one QoS to every reader; "
-            "give the same profile for every topic, or record them in separate runs"
-        )
-    if not profiles:
+    merged: dict[str, Any] = {}  # one reader QoS for all: the topics' entries must not contradict
+    for entry in data.values():
+        for key in ("reliability", "durability", "depth"):
+            if key not in entry:
+                continue
+            value = str(entry[key]).lower() if key != "depth" else entry[key]
+            if merged.setdefault(key, value) != value:
+                raise RostoolError(
+                    f"--qos-profile-overrides-path {path}: rostool applies one QoS to every reader, but the "
+                    f"topics ask for different {key}; record them in separate runs"
+                )
+    if not merged:
         return None
-    reliability, durability, depth = profiles.pop()
+    reliability, durability, depth = (merged.get(k) for k in ("reliability", "durability", "depth"))
     for value, allowed in (
         (reliability, ("reliable", "best_effort")),
         (durability, ("volatile", "transient_local")),
