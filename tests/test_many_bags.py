@@ -169,3 +169,22 @@ def test_topics_some_bags_lack(fleet: Path, tmp_path: Path) -> None:
     assert csv.returncode == 1 and csv.stderr == (
         "rostool: --csv prints one bag: for several, use `rostool bag export --format csv`\n"
     )
+
+
+def test_progress_bar_on_a_terminal_keeps_stdout_the_data(fleet: Path) -> None:
+    """stderr a terminal (the bar is drawn there), stdout a pipe: every message still goes to stdout."""
+    import os
+    import subprocess
+    import sys
+
+    leader, follower = os.openpty()
+    try:
+        result = subprocess.run(
+            [sys.executable, "-m", "rostool", "bag", "echo", str(fleet), "/chatter", "--json", "-j", "2"],
+            env=env(), stdout=subprocess.PIPE, stderr=follower, text=True, timeout=180,
+        )  # fmt: skip
+    finally:
+        os.close(follower)
+        os.close(leader)
+    assert result.returncode == 0
+    assert [json.loads(line)["bag"] for line in result.stdout.splitlines()].count("a") == 30

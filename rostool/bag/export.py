@@ -300,7 +300,7 @@ class _Bar:
 
         self._progress = Progress(
             TextColumn("exporting"), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn(),
-            console=Console(stderr=True), transient=True,
+            console=Console(stderr=True), transient=True, redirect_stdout=False,
         )  # fmt: skip
         self._task = self._progress.add_task(name, total=total or None)
         self._progress.start()

@@ -156,12 +156,13 @@ def run(
     items: Sequence[BagItem],
     jobs: int | None,
     label: str = "bags",
+    bar: bool = True,
 ) -> Iterator[tuple[BagItem, T | Failure]]:
     """(item, func(item) or its Failure) for every bag, in the order of `items`. `func` must be a module-level
     function (it runs in worker processes when jobs > 1)."""
     if jobs is None:  # starting worker processes costs ~0.5 s: worth it only for enough data
         jobs = default_jobs() if sum(_size(item.path) for item in items) >= PARALLEL_FROM_BYTES else 1
-    with _Progress(len(items), label) as progress:
+    with _Progress(len(items), label, bar) as progress:
         if jobs <= 1 or len(items) <= 1:
             for item in items:
                 result = _call(func, item)
@@ -196,14 +197,15 @@ def run(
 class _Progress:
     """One rich progress bar over the bags on a terminal; nothing otherwise."""
 
-    def __init__(self, total: int, label: str) -> None:
+    def __init__(self, total: int, label: str, show: bool) -> None:
         self.total = total
         self.label = label
+        self.show = show
         self._bar: Any = None
         self._task: Any = None
 
     def __enter__(self) -> _Progress:
-        if self.total > 1 and sys.stderr.isatty():
+        if self.show and self.total > 1 and sys.stderr.isatty():
             from rich.console import Console
             from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
@@ -214,6 +216,7 @@ class _Progress:
                 TimeElapsedColumn(),
                 console=Console(stderr=True),
                 transient=True,
+                redirect_stdout=False,  # stdout is the data (echo): never through the console
             )
             self._bar.start()
             self._task = self._bar.add_task(self.label, total=self.total)
@@ -234,12 +237,13 @@ def successes(
     jobs: int | None,
     label: str = "bags",
     keep_going: bool = False,
+    bar: bool = True,
 ) -> Iterator[tuple[BagItem, T]]:
     """`run`, keeping what succeeded. The first failure (in the bags' order) is the command's one-line
     error and ends the other workers; with `keep_going` each failure is one line on stderr as it comes,
     the other bags go on, and a last line ends the command with a non-zero exit."""
     failed = 0
-    results = run(func, items, jobs, label)
+    results = run(func, items, jobs, label, bar)
     try:
         for item, result in results:
             if not isinstance(result, Failure):

@@ -267,7 +267,8 @@ def _echo_many(items: Sequence[BagItem], settings: EchoSettings, jobs: int | Non
 
     with tempfile.TemporaryDirectory(prefix="rostool-echo-") as folder:
         work = partial(_echo_to_file, settings, folder)
-        for _item, text_path in successes(work, items, jobs, "reading"):
+        # no bar when the messages go to the same terminal: it would cut through them
+        for _item, text_path in successes(work, items, jobs, "reading", bar=not sys.stdout.isatty()):
             with open(text_path, encoding="utf-8") as handle:
                 shutil.copyfileobj(handle, sys.stdout)
             os.unlink(text_path)
@@ -440,11 +441,16 @@ def _copy_each(job: _CopyJob, sources: Sequence[str], jobs: int | None) -> None:
         Path(job.out).mkdir(parents=True, exist_ok=True)
     except OSError as err:
         raise RostoolError(f"{job.out}: cannot create the output folder: {err.strerror or err}") from err
-    for item, (written, topics, dst) in successes(partial(_copy_one, job), items, jobs, "copying"):
-        if dst:
-            _report(written, topics, dst)
-        else:
-            click.echo(f"{item.path}: none of the --topics, nothing written", err=True)
+    done: list[tuple[BagItem, int, int, str]] = []
+    try:
+        for item, (written, topics, dst) in successes(partial(_copy_one, job), items, jobs, "copying"):
+            done.append((item, written, topics, dst))
+    finally:  # after the progress bar is gone
+        for item, written, topics, dst in done:
+            if dst:
+                _report(written, topics, dst)
+            else:
+                click.echo(f"{item.path}: none of the --topics, nothing written", err=True)
 
 
 def _present_topics(item: BagItem, job: _CopyJob) -> list[str]:
