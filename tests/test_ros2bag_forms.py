@@ -429,3 +429,22 @@ def test_play_qos_profile_overrides_on_the_empty_bag(profile: str, tmp_path: Pat
     result = rostool(args, ros2_env(), timeout=20)
     assert result.returncode == 0 and "rostool: warning: no message was played" in result.stderr
     assert "Traceback" not in result.stderr and "error" not in result.stderr.lower()
+
+
+def test_recording_killed_is_recovered_by_reindex(
+    start_peer: Peer, graph_env: dict[str, str], tmp_path: Path
+) -> None:
+    """kill -9 while recording a rosbag2 directory: `bag reindex DIR` gives a bag rosbags reads."""
+    start_peer("--talk", "/chatter", "--rate", "50")
+    proc = rostool_popen(
+        ["--ros2", "bag", "record", "--topics", "/chatter", "-o", "killed"], graph_env, cwd=tmp_path
+    )
+    time.sleep(4.0)
+    proc.kill()
+    proc.communicate(timeout=10)
+    bag = tmp_path / "killed"
+    assert (bag / "killed_0.mcap").exists()
+    fixed = rostool(["bag", "reindex", str(bag)], graph_env)
+    assert fixed.returncode == 0, fixed.stderr
+    messages = read_rosbags(bag)["/chatter"]
+    assert messages and all(m.data.startswith("hello") for m in messages)  # type: ignore[attr-defined]

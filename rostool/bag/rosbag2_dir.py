@@ -1,8 +1,9 @@
 """`ros2 bag record`'s output: a rosbag2 directory (metadata.yaml + NAME_0.mcap, NAME_1.mcap, ...).
 
 Each storage file is written by `record.Ros2Sink` (rosbags' writer: mcap or sqlite3, message or file
-compression with zstd) under `DIR/NAME_N.mcap.active/` and moved into DIR when it is closed, so DIR only
-ever holds complete files. A new file starts when the current one reaches --max-bag-size bytes or spans
+compression with zstd) under `DIR/NAME_N.mcap.active/` and moved into DIR when it is closed; an
+uncompressed .mcap is also linked as DIR/NAME_N.mcap while written, so after a crash `rostool bag reindex
+DIR` finds it. A new file starts when the current one reaches --max-bag-size bytes or spans
 --max-bag-duration seconds (rosbag2's splitting); --max-bag-files deletes the oldest. metadata.yaml
 (version 9, rosbag2's keys) is rewritten after every closed file, so a recorder killed mid-way leaves a
 readable bag of the files completed so far.
@@ -10,6 +11,7 @@ readable bag of the files completed so far.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import shutil
 from collections.abc import Mapping
@@ -83,10 +85,19 @@ class Rosbag2DirSink:
             compression = (layout.compression_mode, layout.compression_format or "zstd")
         fmt = "mcap" if layout.storage == "mcap" else "db3"
         self._file_start = None
-        return Ros2Sink(layout.path / name, fmt, self.source, False, compression)
+        sink = Ros2Sink(layout.path / name, fmt, self.source, False, compression)
+        if fmt == "mcap" and compression is None:
+            # The file being written also appears as DIR/NAME_N.mcap (a second link to it): after a crash
+            # it is where ros2 bag and `rostool bag reindex DIR` look for it.
+            produced = sink.active / f"{sink.active.name}.mcap"
+            with contextlib.suppress(OSError):
+                os.link(produced, sink.final)
+        return sink
 
     def _close_part(self) -> None:
         sink = self._sink
+        if sink.final.exists():  # the crash-time link: the closed file replaces it
+            sink.final.unlink()
         sink.close()
         self.problems.update(sink.problems)
         meta = dict(sink.metadata)
