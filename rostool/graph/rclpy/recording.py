@@ -41,11 +41,14 @@ class RclpySource:
         self.warn = warn
         self.resolve = graph.resolve
         graph.warn = warn  # the subscriptions' warnings (incompatible QoS) go to the same place
+        self._settled = False
 
     def published_topics(self) -> list[str]:
         """Topics another node publishes; hidden ones only when asked for, as `ros2 bag record -a` does."""
         graph = self.graph
-        graph.settle()
+        if not self._settled:  # once: later polls (-a, topics that appear later) must not wait
+            graph.settle()
+            self._settled = True
         names = [name for name, _types in graph.node.get_topic_names_and_types()]
         published = [name for name in names if graph._endpoints(name)[0]]
         return sorted(t for t in published if self.include_hidden or not hidden_name(t))

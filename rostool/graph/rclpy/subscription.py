@@ -8,6 +8,7 @@ can serve it, as the DDS backend does.
 
 from __future__ import annotations
 
+import contextlib
 import threading
 import time
 from collections.abc import Callable
@@ -42,6 +43,7 @@ class RclpySubscription:
         self._closed = threading.Event()
         self._incompatible = threading.Event()
         self._reader: Any = None
+        self._detached = False
         self._thread = threading.Thread(target=self._run, name=f"rclpy sub {topic}", daemon=True)
         self._thread.start()
 
@@ -101,8 +103,12 @@ class RclpySubscription:
         self._reader = graph.node.create_subscription(
             cls, topic, on_bytes, to_rclpy(cache_profile), raw=True, event_callbacks=events
         )
+        taking = self._detach(self._reader)
         while not self._closed.is_set():
-            self._incompatible.wait()
+            if taking:
+                self._take_until_event(self._reader, cls, on_bytes)
+            else:
+                self._incompatible.wait()
             if self._closed.is_set():
                 break
             self._incompatible.clear()
@@ -112,6 +118,53 @@ class RclpySubscription:
                 return adapted
             self._report_incompatible(profile)
         return None
+
+    def _detach(self, reader: Any) -> bool:
+        """Serve this subscription (its messages and its QoS events) in this thread instead of the
+        executor's: it waits once for a batch and takes every message there is, where rclpy's executor
+        rebuilds its wait set for each message. False where rclpy's internals differ from Jazzy's and
+        Kilted's: the executor serves it then."""
+        try:
+            from rclpy.impl.implementation_singleton import rclpy_implementation
+
+            handlers = list(reader.event_handlers)
+            context = self._graph.context.context.handle
+            self._wait_set = rclpy_implementation.WaitSet(1, 0, 0, 0, 0, len(handlers), context)
+            node = self._graph.node
+            node._subscriptions.remove(reader)
+            for handler in handlers:
+                node.remove_waitable(handler)
+        except Exception:
+            return False
+        self._detached = True
+        return True
+
+    def _take_until_event(self, reader: Any, cls: Any, on_bytes: Callable[[bytes], None]) -> None:
+        """Take messages as they come, and run the QoS event callbacks, until closed or a QoS event calls
+        for a look."""
+        wait_set, handle, handlers = self._wait_set, reader.handle, list(reader.event_handlers)
+        with contextlib.ExitStack() as held:  # in use: not destroyed while waited on
+            held.enter_context(handle)
+            for handler in handlers:
+                held.enter_context(handler)
+            while not self._incompatible.is_set():
+                wait_set.clear_entities()
+                wait_set.add_subscription(handle)
+                for handler in handlers:
+                    handler.add_to_wait_set(wait_set)
+                wait_set.wait(100_000_000)  # 0.1 s: close is noticed in time
+                for handler in handlers:
+                    if handler.is_ready(wait_set):
+                        data = handler.take_data()
+                        if data and handler.callback is not None:
+                            handler.callback(data)
+                if not wait_set.get_ready_entities("subscription"):
+                    continue
+                while True:
+                    taken = handle.take_message(cls, True)
+                    if taken is None:
+                        break
+                    on_bytes(taken[0])
 
     def _on_incompatible(self, event: Any) -> None:
         self._policy = getattr(getattr(event, "last_policy_kind", None), "name", "?")
@@ -149,6 +202,11 @@ class RclpySubscription:
         reader, self._reader = self._reader, None
         if reader is not None:
             try:
+                if self._detached:  # the node destroys only what it lists
+                    self._detached = False
+                    self._graph.node._subscriptions.append(reader)
+                    for handler in reader.event_handlers:
+                        self._graph.node.add_waitable(handler)
                 self._graph.node.destroy_subscription(reader)
             except Exception:  # the context is already shut down: rclpy destroyed it
                 return
