@@ -263,7 +263,9 @@ def test_record_use_sim_time_stamps_with_clock(
         ["topic", "pub", "/clock", "rosgraph_msgs/msg/Clock", "{clock: {sec: 1000}}", "-r", "20"], graph_env
     )
     try:
-        _record(["--topics", "/chatter", "--use-sim-time", "-o", "sim"], graph_env, tmp_path, 4.0)
+        listed = lambda: "/clock" in rostool(["topic", "list"], graph_env).stdout.split()  # noqa: E731
+        assert wait_until(listed, timeout=20)
+        _record(["--topics", "/chatter", "--use-sim-time", "-o", "sim"], graph_env, tmp_path, 5.0)
     finally:
         stop(clock)
     from rosbags.highlevel import AnyReader
