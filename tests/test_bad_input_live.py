@@ -139,7 +139,7 @@ ROS2_GRAPH_CASES: list[tuple[str, list[str]]] = [
 ]
 
 
-# ros2cli's own status lines, printed (on stderr) before the error when a verb waits in ros2's forms.
+# ros2cli's own status lines, printed (where ros2 prints them) before the error when a verb waits.
 STATUS = re.compile(
     r"WARNING: topic \[.*\] does not appear to be published yet\n"
     r"|Waiting for an action server to become available\.\.\.\n"
@@ -185,8 +185,11 @@ def _run(case: tuple[str, list[str]], env: Callable[[], dict[str, str]], places:
                               capture_output=True, text=True, timeout=TIMEOUT)  # fmt: skip
     except subprocess.TimeoutExpired:
         return f"{name}: rostool {' '.join(args)}: no answer within {TIMEOUT} s"
-    stderr = "".join(line for line in done.stderr.splitlines(keepends=True) if not STATUS.fullmatch(line))
-    wrong = _check(stderr, done.stdout, done.returncode, None)
+    stderr, stdout = (
+        "".join(line for line in text.splitlines(keepends=True) if not STATUS.fullmatch(line))
+        for text in (done.stderr, done.stdout)
+    )
+    wrong = _check(stderr, stdout, done.returncode, None)
     took = time.monotonic() - started
     return f"{name}: rostool {' '.join(args)} ({took:.1f} s): {wrong}" if wrong else ""
 
