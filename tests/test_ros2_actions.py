@@ -174,10 +174,9 @@ def test_list_info(fibonacci: tuple[subprocess.Popen[str], dict[str, str]]) -> N
     assert rostool(["service", "list"], env).stdout == ""
     hidden = rostool(["service", "list", "-a"], env).stdout.splitlines()
     assert "/fibonacci/_action/send_goal" in hidden and len(hidden) == 3
-    missing = rostool(["action", "info", "/nope"], env)  # as ros2 action info: nobody serves or uses it
-    assert (
-        missing.returncode == 0 and missing.stdout == "Action: /nope\nAction clients: 0\nAction servers: 0\n"
-    )
+    missing = rostool(["action", "info", "/nope"], env)  # ros2 action info's lines, then the error
+    assert missing.stdout == "Action: /nope\nAction clients: 0\nAction servers: 0\n"
+    assert missing.returncode == 1 and "unknown action /nope" in missing.stderr
 
 
 def test_ctrl_c_cancels_the_goal_on_the_server() -> None:

@@ -92,7 +92,7 @@ def list_actions(ctx: click.Context, show_types: bool, count: bool, as_json: boo
 @click.pass_context
 def info(ctx: click.Context, name: str, wait: float, show_types: bool, count: bool, as_json: bool) -> None:
     """Show an action's type, server, clients and the goals its server tracks (ROS 2: its clients and
-    servers, as ros2 action info does; an action nobody serves or uses has 0 of each).
+    servers, as ros2 action info does; for an action nobody serves, 0 of each and then the error).
 
     \b
     Examples:
@@ -116,6 +116,10 @@ def info(ctx: click.Context, name: str, wait: float, show_types: bool, count: bo
             click.echo(f"{title}: {len(nodes)}")
             for node in [] if count else nodes:
                 click.echo(f"    {node} [{found['type']}]" if show_types else f"    {node}")
+        if not found["servers"] and not found["clients"]:  # ros2 exits 0 here; an unknown name is an error
+            raise RostoolError(
+                f"unknown action {found['name']}: no server announces it (`rostool action list`)"
+            )
 
 
 @action.command("type")
@@ -133,8 +137,8 @@ def type_(ctx: click.Context, name: str) -> None:
     with live_graph(ctx) as graph:
         resolved = graph.resolve(name)
         types = sorted({a.type for a in graph.actions() if a.name == resolved and a.type})
-    if not types:
-        ctx.exit(1)
+    if not types:  # as ros2 action type: nothing on stdout, exit 1
+        raise RostoolError(f"unknown action {resolved}: no server announces it (`rostool action list`)")
     click.echo("\n".join(types))
 
 

@@ -235,6 +235,8 @@ def get(
             value, text = graph.parameters(None).show(name)
             click.echo(to_json(value) if as_json else text, nl=not as_json)
             return
+        if param_name is None and name.startswith("/"):  # a node's name: no parameter name starts so
+            raise RostoolError("ROS 2 parameters belong to a node: rostool param get NODE PARAM")
         if param_name is None:
             _get_every_node(graph, name, hide_type, include_hidden, as_json)
             return
@@ -312,7 +314,7 @@ def set_(
             line = ("Set parameter successful" if ok else "Setting parameter failed") + (
                 f": {reason}" if reason else "")  # fmt: skip
             if len(pairs) == 2 and not ok:
-                raise RostoolError(line)  # one parameter: its failure is the command's error
+                raise RostoolError(f"{line} (parameter {param_name} of {params.node})")  # the command's error
             click.echo(f"{param_name}: {line}" if len(pairs) > 2 else line, err=not ok)
             failed += not ok
     if failed:
@@ -397,7 +399,7 @@ def delete(
             line = ("Deleted parameter successfully" if ok else "Deleting parameter failed") + (
                 f": {reason}" if reason else "")  # fmt: skip
             if len(param_names) == 1 and not ok:
-                raise RostoolError(line)  # one parameter: its failure is the command's error
+                raise RostoolError(f"{line} (parameter {param_name} of {params.node})")  # the command's error
             click.echo(f"{param_name}: {line}" if len(param_names) > 1 else line, err=not ok)
             failed += not ok
     if failed:

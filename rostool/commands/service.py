@@ -102,8 +102,11 @@ def type_(ctx: click.Context, name: str) -> None:
     with live_graph(ctx) as graph:
         if graph.style == "ros2":  # as ros2 service type: the announced type(s), or nothing and exit 1
             types = sorted({t for n, t, _ in graph.services() if n == graph.resolve(name) and t})
-            if not types:
-                ctx.exit(1)
+            if not types:  # as ros2 service type: nothing on stdout, exit 1
+                resolved = graph.resolve(name)
+                raise RostoolError(
+                    f"unknown service {resolved}: no server announces it (`rostool service list`)"
+                )
             click.echo("\n".join(types))
             return
         click.echo(graph.service_type(name))
