@@ -122,6 +122,7 @@ RECORD_ERRORS = [
         "Cannot specify compression format without a compression mode",
     ),
     (["-a", "--use-sim-time", "--no-discovery"], "--use-sim-time and --no-discovery both set"),
+    (["-a", "--snapshot-mode"], "--snapshot-mode is not supported by rostool's recorder yet"),
 ]
 
 
