@@ -18,7 +18,16 @@ from pathlib import Path
 import pytest
 import yaml
 
-from tests.support import IN_CI, debian, require_ros1_peers, rostool, rostool_popen, start_rospy_script, stop
+from tests.support import (
+    IN_CI,
+    TESTDATA,
+    debian,
+    require_ros1_peers,
+    rostool,
+    rostool_popen,
+    start_rospy_script,
+    stop,
+)
 from tests.test_bag_play import wait_published
 from tests.test_bag_record import BIG_PUBLISHER
 
@@ -154,3 +163,40 @@ def _write_big_bag(path: Path) -> None:
                 1_700_000_000_000_000_000 + i * 10_000_000,
                 store.serialize_ros1(string(data=data), "std_msgs/msg/String"),
             )
+
+
+def test_reindex_on_a_full_disk(tmp_path: Path, small_disk: Path) -> None:
+    """`bag reindex` needs room for the rebuilt copy: without it, one line, the cut-short original kept
+    as it was and no temporary file left."""
+    from tests.test_bag_reindex import _kill
+    from tests.test_bag_support import write_ros1_bag
+
+    bag = write_ros1_bag(small_disk / "killed.bag", count=3000)
+    _kill(bag)
+    mcap = small_disk / "cut.mcap"
+    whole = (TESTDATA / "ros2" / "talker_mcap" / "talker.mcap").read_bytes()
+    mcap.write_bytes(whole[: len(whole) * 6 // 10])
+    fd = os.open(small_disk / "filler", os.O_WRONLY | os.O_CREAT)
+    try:  # fill the disk up to its last bytes
+        while True:
+            os.write(fd, bytes(4096))
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
+    directory = small_disk / "run.mcap.active"  # what a killed ROS 2 recorder leaves
+    directory.mkdir()
+    os.link(mcap, directory / "run.mcap.active.mcap")
+    for victim in (bag, mcap, directory):
+        before = _digest(victim if victim.is_file() else directory / "run.mcap.active.mcap")
+        result = rostool(["bag", "reindex", str(victim)], dict(os.environ), timeout=60)
+        assert result.returncode == 1, result.stderr
+        _one_full_line(result.stderr)
+        assert _digest(victim if victim.is_file() else directory / "run.mcap.active.mcap") == before
+        assert sorted(p.name for p in small_disk.iterdir()) == [
+            "cut.mcap",
+            "filler",
+            "killed.bag",
+            directory.name,
+        ]
+        assert [p.name for p in directory.iterdir()] == ["run.mcap.active.mcap"]

@@ -15,6 +15,7 @@ storage files hold. The original directory's files are kept in `DIR.orig/` (hard
 from __future__ import annotations
 
 import bz2
+import errno
 import os
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -60,8 +61,13 @@ def reindex(given: str | Path) -> ReindexResult:
             messages, chunks, partial = reindex_mcap(path, tmp)
         os.replace(path, backup)
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as err:
         tmp.unlink(missing_ok=True)
+        if isinstance(err, OSError) and err.errno in (errno.ENOSPC, errno.EDQUOT, errno.EFBIG):
+            raise RostoolError(
+                f"{path}: no room for the rebuilt copy ({err.strerror}); the file is untouched: free some "
+                "space and retry"
+            ) from err
         raise
     return ReindexResult(path, backup, messages, chunks, partial)
 

@@ -6,6 +6,7 @@ metadata.yaml) and for directories whose metadata.yaml is lost or stale, as `ros
 
 from __future__ import annotations
 
+import errno
 import os
 import shutil
 import sqlite3
@@ -42,14 +43,26 @@ def reindex_rosbag2(given: Path) -> ReindexResult:
     backup = directory.with_name(directory.name + ".orig")
     if backup.exists():
         raise RostoolError(f"{backup} exists (from an earlier reindex?); move it away first")
-    _keep_originals(directory, backup, copy_db3=kind == "db3")
-    partial = False
-    for path in files:
-        if kind == "mcap":
-            partial = _repair_mcap(path) or partial
-        else:
-            _roll_back(path)
-    messages = _write_metadata(directory, files, kind)
+    partial = changed = False
+    try:
+        _keep_originals(directory, backup, copy_db3=kind == "db3")
+        for path in files:
+            if kind == "mcap":
+                repaired = _repair_mcap(path)
+                partial, changed = partial or repaired, changed or repaired
+            else:
+                changed = True
+                _roll_back(path)
+        messages = _write_metadata(directory, files, kind)
+    except OSError as err:
+        if not changed:
+            shutil.rmtree(backup, ignore_errors=True)
+        if err.errno not in (errno.ENOSPC, errno.EDQUOT, errno.EFBIG):
+            raise
+        kept = f"the originals are in {backup}" if changed else "nothing was changed"
+        raise RostoolError(
+            f"{directory}: no room to rebuild it ({err.strerror}); {kept}: free some space and retry"
+        ) from err
     return ReindexResult(directory, backup, messages, 0, partial)
 
 
