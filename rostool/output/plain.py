@@ -26,7 +26,8 @@ def field_names(cls: type) -> tuple[str, ...]:
             f.name
             for f in dataclasses.fields(cls)
             if f.name != "structure_needs_at_least_one_member" and not f.name.startswith("__")
-        )
+            and not str(f.type).startswith(("ClassVar", "typing.ClassVar"))  # a store's constants
+        )  # fmt: skip
     return names
 
 

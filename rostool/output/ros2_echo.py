@@ -22,6 +22,8 @@ _IDL_NAMES = {"bool": "boolean", "byte": "octet", "char": "uint8", "float32": "f
 BASE, NAME, ARRAY, SEQUENCE = 1, 2, 3, 4  # rosbags' Nodetype values
 
 Lookup = Callable[[str], Any]
+_EVENT_INFO = "service_msgs/msg/ServiceEventInfo"
+_EVENT_TYPES = {0: "REQUEST_SENT", 1: "REQUEST_RECEIVED", 2: "RESPONSE_SENT", 3: "RESPONSE_RECEIVED"}
 
 
 @dataclass
@@ -71,11 +73,15 @@ def convert(value: Any, opts: Ros2EchoOptions, lookup: Lookup, desc: Any = None)
     """A message or field value as the plain values ros2 topic echo dumps."""
     limit = opts.truncate_length
     if is_message(value):
-        fields = lookup(getattr(value, "__msgtype__", "")) or {}
-        return {
+        msgtype = getattr(value, "__msgtype__", "")
+        fields = lookup(msgtype) or {}
+        plain = {
             name: convert(getattr(value, name), opts, lookup, fields.get(name))
             for name in field_names(type(value))
         }
+        if msgtype == _EVENT_INFO:  # ros2 service echo names the event (REQUEST_SENT, ...)
+            plain["event_type"] = _EVENT_TYPES.get(plain["event_type"], plain["event_type"])
+        return plain
     if _is_byte(desc) and isinstance(value, int):
         return chr(value)
     if isinstance(value, (bytes, bytearray)):

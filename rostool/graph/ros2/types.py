@@ -69,12 +69,27 @@ class TypeSupport:
         """Is the type in the store, or in a source file (then it is registered now)?"""
         if self.in_store(store_name):
             return True
+        if store_name.endswith("_Event") and "/srv/" in store_name:
+            return self._service_event(store_name)
         with self._load_lock:
             typs = self.sources.load(store_name, self.in_store)
             if typs is None:
                 return False
             self.register(typs)
             return True
+
+    def _service_event(self, event: str) -> bool:
+        """`pkg/srv/T_Event` (service introspection's `<service>/_service_event` topic), built as rosidl
+        does from the service's request and response."""
+        service, info = event.removesuffix("_Event"), "service_msgs/msg/ServiceEventInfo"
+        parts = [f"{service}_Request", f"{service}_Response"]
+        if not (self.in_store(info) and all(self.knows(part) for part in parts)):
+            return False
+        fields = [("info", (Nodetype.NAME, info))]
+        fields += [(name, (Nodetype.SEQUENCE, ((Nodetype.NAME, part), 1)))
+                   for name, part in zip(("request", "response"), parts, strict=True)]  # fmt: skip
+        self.register({event: ([], fields)})
+        return True
 
     def in_store(self, store_name: str) -> bool:
         """Known without looking at source files (built in, or registered already)."""
