@@ -647,6 +647,7 @@ def play(ctx: click.Context, **opts: Any) -> None:
             console.keyboard = False
         if graph.encoding != "cdr":
             raise RostoolError("the ROS 2 form of bag play needs a ROS 2 graph")
+        _only_present(options, reader, graph.resolve, warn)
         player = Ros2Player(reader, graph, options, console, warn)
         if options.pause and not console.keyboard:
             raise RostoolError("-p/--start-paused needs a terminal on stdin to resume with space")
@@ -656,6 +657,23 @@ def play(ctx: click.Context, **opts: Any) -> None:
     if result.published == 0 and not quiet:
         click.echo("rostool: warning: no message was played (check --start-offset and --topics)", err=True)
     sys.stdout.flush()
+
+
+def _only_present(
+    options: Any, reader: Any, resolve: Callable[[str], str], warn: Callable[[str], None]
+) -> None:
+    """ros2 bag play plays what it can of --topics/--services: names the bag lacks are left out (warned)."""
+    if not options.topics:
+        return
+    wanted = [resolve(t) for t in options.topics]
+    present = [t for t in wanted if t in reader.topics]
+    missing = [t for t in wanted if t not in reader.topics]
+    if missing and not present:
+        have = ", ".join(sorted(reader.topics)) or "none"
+        raise RostoolError(f"topic {missing[0]} is not in the bag (topics: {have})")
+    for name in missing:
+        warn(f"{name} is not in the bag; playing the other topics")
+    options.topics = present
 
 
 def _check_storage(path: str, storage: str | None) -> None:
