@@ -13,6 +13,7 @@ import json
 import re
 import subprocess
 import sys
+import time
 from collections.abc import Callable
 from pathlib import Path
 
@@ -232,18 +233,33 @@ def test_echo_of_a_latched_best_effort_mix_adapts(start_peer: Start, rclpy_tool:
     assert json.loads(echo.stdout)["data"].startswith("hello ")
 
 
-def test_hz_at_10_hz_and_1_khz(start_peer: Start, rclpy_tool: Tool) -> None:
-    """hz agrees within 2 % with the rate the publisher itself counted over the same seconds."""
-    talkers = {"/slow": start_peer("--name", "slow", "--talk", "/slow", "--rate", "10")}
-    talkers["/fast"] = start_peer("--name", "fast", "--talk", "/fast", "--rate", "1000", "--depth", "1000")
-    for topic, peer in talkers.items():
-        before = len(peer.of("published"))
-        out = rclpy_tool("topic", "hz", topic, "--json", "--duration", "5.2").stdout
-        reports = [json.loads(line) for line in out.splitlines()]
-        assert reports, out
-        during = peer.of("published")[before + 1 :]
-        true_rate = (during[-1]["count"] - during[0]["count"]) / (during[-1]["t"] - during[0]["t"])
-        assert abs(reports[-1]["rate"] - true_rate) / true_rate < 0.02, (topic, true_rate, reports[-1])
+def test_hz_at_10_hz_and_1_khz(
+    graph_env: dict[str, str], tmp_path: Path, distro: str, start_peer: Start, rclpy_tool: Tool
+) -> None:
+    """hz agrees within 2 % with the rate the publisher itself measured: over the same seconds at 10 Hz, and
+    over a burst of exactly 3000 messages at 1 kHz, of which hz must count every one (a Python publisher on
+    a loaded machine does not keep exactly 1 kHz, and its rate drifts from one second to the next)."""
+    slow = start_peer("--name", "slow", "--talk", "/slow", "--rate", "10")
+    before = len(slow.of("published"))
+    out = rclpy_tool("topic", "hz", "/slow", "--json", "--duration", "5.2").stdout
+    reports = [json.loads(line) for line in out.splitlines()]
+    assert reports, out
+    during = slow.of("published")[before + 1 :]
+    true_rate = (during[-1]["count"] - during[0]["count"]) / (during[-1]["t"] - during[0]["t"])
+    assert abs(reports[-1]["rate"] - true_rate) / true_rate < 0.02, (true_rate, reports[-1])
+
+    hz = rostool_rclpy_popen(["topic", "hz", "/fast", "--json"], graph_env, tmp_path, distro)
+    try:
+        fast = start_peer("--name", "fast", "--talk", "/fast", "--rate", "1000", "--depth", "1000",
+                          "--count", "3000", "--subs", "1")  # fmt: skip
+        sent = fast.wait_for("sent", timeout=60)
+        time.sleep(2.0)  # hz reports once a second
+    finally:
+        out, _err = stop(hz)
+    last = [json.loads(line) for line in out.splitlines() if line.startswith("{")][-1]
+    true_rate = (sent["count"] - 1) / sent["seconds"]
+    assert last["received"] == 3000, last
+    assert abs(last["rate"] - true_rate) / true_rate < 0.02, (true_rate, last)
 
 
 def test_bw_measures_the_real_cdr_size(start_peer: Start, rclpy_tool: Tool) -> None:

@@ -19,7 +19,7 @@ from rostool.errors import RostoolError
 from rostool.graph.base import NodeInfo, Received, Subscription, TopicInfo
 from rostool.graph.rclpy import types as rtypes
 from rostool.graph.rclpy.recording import BagVerbs
-from rostool.graph.rclpy.refusals import NotYet
+from rostool.graph.rclpy.refusals import Refusals
 from rostool.graph.rclpy.services import ServiceVerbs
 from rostool.graph.rclpy.verbs import ActionVerbs, ParameterVerbs
 from rostool.graph.ros2 import dds
@@ -39,7 +39,7 @@ TOPIC_WAIT_SECONDS = 1.5  # topic_type: how long a topic without publishers is g
 UNKNOWN_NODE = "_NODE_NAME_UNKNOWN_"  # what ros2cli (and the DDS backend) show for endpoints of no node
 
 
-class RclpyGraph(ServiceVerbs, ParameterVerbs, ActionVerbs, BagVerbs, NotYet):
+class RclpyGraph(ServiceVerbs, ParameterVerbs, ActionVerbs, BagVerbs, Refusals):
     ros_version = 2
     style: Literal["ros1", "ros2"] = "ros2"
     encoding: Encoding = "cdr"

@@ -1,12 +1,9 @@
-"""What the rclpy backend does not do yet: one line each, naming the DDS backend, which does it."""
+"""What ROS 2 has no way to do (ping and kill a node) or only ROS 1 has (service uri/node/args): the DDS
+backend's lines."""
 
 from __future__ import annotations
 
 from rostool.errors import RostoolError
-
-
-def not_yet(what: str) -> RostoolError:
-    return RostoolError(f"{what} is not available with the rclpy backend yet; use --ros2-backend dds")
 
 
 def ros1_only(what: str) -> RostoolError:
@@ -15,7 +12,7 @@ def ros1_only(what: str) -> RostoolError:
     return dds_line(what)
 
 
-class NotYet:
+class Refusals:
     def ping(self, name: str) -> float:
         raise RostoolError("ROS 2 nodes cannot be pinged (there is no node API); try `rostool node info`")
 
