@@ -405,3 +405,15 @@ def test_services_parameters_actions_print_as_the_dds_backend(
         theirs = rostool(args, graph_env)
         assert mine.stdout == theirs.stdout, (args, theirs.stderr)
     assert "/fib [test_msgs/action/Fibonacci]" in rclpy_tool("action", "list", "-t").stdout
+
+
+def test_ctrl_c_ends_a_waiting_service_call_quietly(
+    graph_env: dict[str, str], tmp_path: Path, distro: str
+) -> None:
+    args = ["service", "call", "/later", "std_srvs/srv/SetBool", "{data: true}", "--wait"]
+    waiting = rostool_rclpy_popen(args, graph_env, tmp_path, distro)
+    time.sleep(3.0)
+    assert waiting.poll() is None, waiting.communicate()
+    out, err = stop(waiting, timeout=10)
+    assert waiting.returncode == 130, err
+    assert "Traceback" not in err and out == ""
