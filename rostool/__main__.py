@@ -1,3 +1,3 @@
-from rostool.cli import main
+from rostool._entry import main
 
 main()

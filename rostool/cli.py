@@ -148,6 +148,8 @@ def main() -> None:
     except KeyboardInterrupt:
         sys.exit(130)
     except Exception as err:
+        if _interrupted(err):  # Ctrl+C inside an import can surface wrapped (e.g. by __set_name__)
+            sys.exit(130)
         # A bug of ours, not the user's: still one line, with a way to see the details.
         if os.environ.get("ROSTOOL_DEBUG"):
             raise
@@ -156,3 +158,14 @@ def main() -> None:
             err=True,
         )
         sys.exit(70)
+
+
+def _interrupted(err: BaseException) -> bool:
+    seen: set[int] = set()
+    current: BaseException | None = err
+    while current is not None and id(current) not in seen:
+        if isinstance(current, KeyboardInterrupt):
+            return True
+        seen.add(id(current))
+        current = current.__cause__ or current.__context__
+    return False

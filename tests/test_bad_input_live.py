@@ -147,9 +147,7 @@ STATUS = re.compile(
 
 # Failures in files this sweep's owner does not own, reported to the lead (see bench/RESULTS.md "Soak"
 # section's neighbour, and the issue 14 report): case name -> what is wrong.
-KNOWN: dict[str, str] = {
-    "topic-pub-bad-yaml-file": "rostool/graph/publishing.py prints PyYAML's multi-line message",
-}
+KNOWN: dict[str, str] = {}
 KNOWN_ROS2: dict[str, str] = {}
 
 

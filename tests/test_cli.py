@@ -5,6 +5,7 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+from pathlib import Path
 
 import click
 import pytest
@@ -12,7 +13,7 @@ import pytest
 from rostool.cli import COMMANDS, root
 from rostool.commands._common import _load, _spec_exists
 from rostool.graph import select_ros_version
-from tests.support import free_port
+from tests.support import free_port, ros2_env
 
 HEAVY = ("rosbags", "cyclonedds", "yaml", "rich", "numpy", "mcap", "rostool.graph", "rostool.bag")
 
@@ -86,3 +87,24 @@ def test_unknown_command_is_a_usage_error() -> None:
     command = [sys.executable, "-m", "rostool", "tpoic"]
     result = subprocess.run(command, env=env, capture_output=True, text=True)
     assert result.returncode == 2 and "No such command 'tpoic'" in result.stderr
+
+
+@pytest.mark.parametrize("moment", [0.03, 0.06, 0.1, 0.15, 0.2, 0.3, 0.5, 0.8])
+def test_ctrl_c_while_starting_is_quiet(moment: float, tmp_path: Path) -> None:
+    """SIGINT at any moment of start-up (imports, the graph opening) ends with 130 and no traceback."""
+    import signal
+    import time
+
+    rostool = Path(sys.executable).with_name("rostool")
+    process = subprocess.Popen(
+        [str(rostool), "--ros2", "--ros2-backend", "dds", "bag", "record", "/nothing", "-O", "x.mcap"],
+        cwd=tmp_path, env=ros2_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    time.sleep(moment)
+    process.send_signal(signal.SIGINT)
+    _out, err = process.communicate(timeout=30)
+    if "init_import_site" in err:
+        pytest.skip("the interrupt reached Python's own start-up, before any rostool code runs")
+    assert "Traceback" not in err and "internal error" not in err, err
+    assert process.returncode in (0, 130), (process.returncode, err)
+    assert not list(tmp_path.glob("*.active")), "an interrupted recorder left a .active"

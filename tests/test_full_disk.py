@@ -87,17 +87,7 @@ def _consecutive(values: list[int], at_least: int) -> None:
 
 @pytest.mark.parametrize(
     "fmt",
-    [
-        "bag",
-        "mcap",
-        pytest.param(
-            "db3",
-            marks=pytest.mark.xfail(
-                strict=True,
-                reason="record.py reports sqlite's 'database or disk is full' as an internal error",
-            ),
-        ),
-    ],
+    ["bag", "mcap", "db3"],
 )
 def test_record_into_a_full_disk(
     debian_master: dict[str, str], tmp_path: Path, small_disk: Path, fmt: str

@@ -14,7 +14,7 @@ from pathlib import Path
 from types import TracebackType
 from typing import Any, Literal
 
-from rostool.errors import RostoolError
+from rostool.errors import RostoolError, one_line, yaml_problem
 
 BagKind = Literal["bag", "rosbag2", "mcap", "db3"]
 
@@ -45,27 +45,11 @@ class BagInput:
         return sum(path.stat().st_size for path in (*self.files, *extra) if path.exists())
 
 
-def one_line(text: str, limit: int = 300) -> str:
-    """`text` as a single line (messages of parsers and libraries often span several), cut at `limit`."""
-    flat = " ".join(text.split())
-    return flat if len(flat) <= limit else flat[: limit - 3] + "..."
-
-
 def warn(text: str) -> None:
     """One `rostool: warning:` line on stderr: the command goes on."""
     import click
 
     click.echo(f"rostool: warning: {one_line(text, 500)}", err=True)
-
-
-def _yaml_problem(err: Exception) -> str:
-    """A YAML parser error in one line: what and where (PyYAML's own text spans several lines)."""
-    problem = getattr(err, "problem", None) or getattr(err, "reason", None) or one_line(str(err))
-    mark = getattr(err, "problem_mark", None)
-    if mark is not None:
-        return f"{problem} at line {mark.line + 1}, column {mark.column + 1}"
-    position = getattr(err, "position", None)
-    return f"{problem} at byte {position}" if position is not None else str(problem)
 
 
 class MetadataError(RostoolError):
@@ -93,7 +77,7 @@ def load_metadata(metadata: Path) -> dict[str, Any]:
     try:
         info = yaml.load(text, Loader=getattr(yaml, "CSafeLoader", yaml.SafeLoader))
     except yaml.YAMLError as err:
-        raise MetadataError(metadata, f"damaged YAML: {_yaml_problem(err)}") from err
+        raise MetadataError(metadata, f"damaged YAML: {yaml_problem(err)}") from err
     except (RecursionError, MemoryError, ValueError, OverflowError) as err:
         raise MetadataError(metadata, f"damaged YAML: {one_line(str(err)) or type(err).__name__}") from err
     body = info.get("rosbag2_bagfile_information") if isinstance(info, dict) else None

@@ -7,7 +7,8 @@ fit is counted as dropped and reported). ROS 1 bags are written by `ros1_writer.
 `NAME.bag.active` and renamed when closed; the data is pushed to the OS at least every 0.1 s, so after a
 SIGKILL `rostool bag reindex NAME.bag.active` recovers everything but that last fraction of a second.
 .mcap/.db3 outputs are ROS 2 bags (messages converted to CDR, types renamed `pkg/msg/T`), written by
-rosbags under the directory `NAME.active/` and moved into place when closed.
+rosbags under the directory `NAME.active/` and moved into place when closed; after a SIGKILL
+`rostool bag reindex NAME.mcap.active` (or `.db3.active`) repairs that directory.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ import os
 import re
 import shutil
 import signal
+import sqlite3
 import struct
 import threading
 import time
@@ -326,7 +328,10 @@ class Ros2Sink:
         try:
             self.writer.close()
         except OSError as err:
-            raise RostoolError(f"{self.active}: cannot finish the bag: {err.strerror or err}") from err
+            raise RostoolError(
+                f"{self.active}: cannot finish the bag: {err.strerror or err}; what was written is in "
+                f"{self.active}: free some space, then run `rostool bag reindex {self.active}`"
+            ) from err
         import yaml
 
         with contextlib.suppress(OSError, yaml.YAMLError, TypeError):
@@ -514,6 +519,8 @@ class Recorder:
         except OSError as err:
             self._failure = err.strerror or str(err)
         except RostoolError as err:
+            self._failure = str(err)
+        except sqlite3.Error as err:  # .db3 output: e.g. "database or disk is full"
             self._failure = str(err)
         except Exception as err:  # a bug of ours: still end with a closed, valid file and one line
             self._failure = f"internal error: {type(err).__name__}: {err}"

@@ -81,8 +81,14 @@ def _topic_list(values: Sequence[str]) -> list[str]:
 @click.option("--json", "as_json", is_flag=True, help="One JSON object (a list for several bags).")
 @click.option("--yaml", "as_yaml", is_flag=True, help="YAML with `rosbag info --yaml`'s keys.")
 @click.option("--freq", is_flag=True, help="Also show each topic's rate (reads message timestamps).")
+@click.option("-t", "--topic-name", is_flag=True, help="Only the topic names, one a line (ros2 bag info -t).")
+@click.option("-v", "--verbose", is_flag=True,
+              help="rosbag2 bags: also count each service's requests and responses.")  # fmt: skip
 @jobs_option
-def info(bags: tuple[str, ...], as_json: bool, as_yaml: bool, freq: bool, jobs: int | None) -> None:
+def info(
+    bags: tuple[str, ...], as_json: bool, as_yaml: bool, freq: bool, topic_name: bool, verbose: bool,
+    jobs: int | None,
+) -> None:  # fmt: skip
     """Summarize bags from their index: duration, size, counts, types and topics.
 
     Several bags, or a directory of bags (searched recursively; a rosbag2 directory is one bag), are
@@ -94,6 +100,7 @@ def info(bags: tuple[str, ...], as_json: bool, as_yaml: bool, freq: bool, jobs: 
       rostool bag info rosbag2_dir/ --json | jq '.topics[] | select(.count > 0) | .name'
       rostool bag info a.bag b.mcap --yaml
       rostool bag info fleet/ -j 2 --json
+      rostool bag info rosbag2_dir/ -t                # topic names only, as ros2 bag info -t
     """
     from functools import partial
 
@@ -114,7 +121,8 @@ def info(bags: tuple[str, ...], as_json: bool, as_yaml: bool, freq: bool, jobs: 
         data = [to_rosbag_yaml(i) for i in infos]
         click.echo(yaml.safe_dump(data[0] if len(data) == 1 else data, sort_keys=False).rstrip("\n"))
     else:
-        click.echo("\n\n".join(format_text(i) for i in infos))
+        separator = "\n" if topic_name else "\n\n"
+        click.echo(separator.join(format_text(i, verbose=verbose, topic_name=topic_name) for i in infos))
 
 
 def _info_one(freq: bool, item: BagItem) -> Any:
@@ -490,15 +498,19 @@ def _report(written: int, topics: int, dst: str) -> None:
 @bag.command(context_settings=CONTEXT)
 @click.argument("files", nargs=-1, required=True, metavar="FILE...")
 def reindex(files: tuple[str, ...]) -> None:
-    """Rebuild the index of a ROS 1 .bag (or the summary of an .mcap) whose writer was killed.
+    """Rebuild the index of a ROS 1 .bag, the summary of an .mcap, or a rosbag2 directory cut short.
 
     Every message that reached the disk is kept, also those of a half-written last chunk. The original
-    file is kept as NAME.orig.bag (NAME.orig.mcap), as `rosbag reindex` does.
+    file is kept as NAME.orig.bag (NAME.orig.mcap), as `rosbag reindex` does. A rosbag2 directory left by
+    a killed recorder (NAME.mcap.active/, NAME.db3.active/, or a `ros2 bag record` directory without
+    metadata.yaml) gets its .mcap files repaired, its .db3 rolled back to the last commit and metadata.yaml
+    rebuilt; the originals are kept in DIR.orig/.
 
     \b
     Examples:
       rostool bag reindex crashed.bag
       rostool bag reindex crashed.mcap
+      rostool bag reindex run.mcap.active
     """
     from rostool.bag.reindex import reindex as rebuild
 

@@ -9,7 +9,7 @@ from typing import Any
 
 import yaml
 
-from rostool.errors import RostoolError
+from rostool.errors import RostoolError, yaml_problem
 from rostool.graph.base import Graph
 from rostool.interfaces.values import message_args
 
@@ -20,8 +20,10 @@ MATCH_WAIT_SECONDS = 3.0  # ROS 2: how long a finite publication waits for the s
 def _file_messages(path: str) -> list[Any]:
     try:
         docs = [doc for doc in yaml.safe_load_all(Path(path).read_text()) if doc is not None]
-    except (OSError, yaml.YAMLError) as err:
-        raise RostoolError(f"cannot read messages from {path}: {err}") from err
+    except OSError as err:
+        raise RostoolError(f"cannot read messages from {path}: {err.strerror or err}") from err
+    except yaml.YAMLError as err:
+        raise RostoolError(f"cannot read messages from {path}: bad YAML: {yaml_problem(err)}") from err
     if not docs:
         raise RostoolError(f"{path} holds no messages (YAML documents separated by ---)")
     return docs
