@@ -582,9 +582,8 @@ def play(
 
     ROS 1 bags are published byte for byte with their stored types (latched where recorded so). ROS 2
     bags (.mcap, .db3, rosbag2 directories) are converted to ROS 1 (`pkg/msg/T` -> `pkg/T`); topics whose
-    type has no ROS 1 equivalent are skipped with a warning. Into a ROS 2 graph (--ros2), ROS 2 bags'
-    CDR bytes are published unchanged with the bag's type names (transient_local where recorded so), and
-    ROS 1 bags are converted as `bag convert` does.
+    type has no ROS 1 equivalent are skipped with a warning. These are rosbag play's flags (ROS 1);
+    under ROS 2 (--ros2, ROS_VERSION=2) `bag play` takes ros2 bag play's (see `rostool --ros2 bag play -h`).
     On a terminal, a status line shows the bag time and space pauses/resumes ('s' steps while paused,
     't' toggles --pause-topics). Remappings may also be given as arguments (`/chatter:=/talk`), and with
     --topics (else --pause-topics), further topic names after the bags.
@@ -596,7 +595,6 @@ def play(
       rostool bag play -l --clock run.bag /scan:=/scan_raw
       rostool bag play -p /replay --skip-empty 5 run.bag --pause-topics /goal
       rostool bag play talker.mcap
-      rostool --ros2 bag play talker.mcap --clock
     """
     from rostool.bag.play import Console, Player, PlayOptions, parse_remaps
     from rostool.bag.reader import BagReader
@@ -736,9 +734,8 @@ def record(
     NAME.bag.active` recovers all but the last 0.1 s. .mcap/.db3 outputs are ROS 2 bags (types
     converted to pkg/msg/T). With -a or -e, topics that appear later are recorded too.
 
-    From a ROS 2 graph (--ros2) the CDR bytes are stored unchanged, .mcap by default; readers adapt to
-    the publishers' QoS unless --qos-* says otherwise; -a leaves out hidden topics (/_name), as ros2 bag
-    record does. A .bag output converts the messages to ROS 1.
+    These are rosbag record's flags (ROS 1); under ROS 2 (--ros2, ROS_VERSION=2) `bag record` takes ros2
+    bag record's and writes a rosbag2 directory (see `rostool --ros2 bag record -h`).
 
     \b
     Examples:
@@ -747,7 +744,6 @@ def record(
       rostool bag record -e '/camera/.*' -x '.*compressed.*' --split --size 1024 --max-splits 5
       rostool bag record --node /move_base -l 100
       rostool bag record -a --duration 30s --format mcap
-      rostool --ros2 bag record /chatter -O chatter.mcap
     """
     import threading
 
