@@ -92,8 +92,8 @@ def test_parameters_of_a_real_node(start_peer: Start, tool: Tool, tmp_path: Path
     # rclpy refuses to undeclare a declared parameter: rostool reports the node's reason
     deleted = tool(["param", "delete", "/talker", "speed"])
     assert deleted.returncode != 0
-    refused = "rostool: Deleting parameter failed: Static parameter cannot be undeclared"
-    assert deleted.stderr_lines == [refused]
+    (line,) = deleted.stderr_lines
+    assert line.startswith("rostool: Deleting parameter failed: Static parameter cannot be undeclared"), line
 
 
 def test_action_goal_with_feedback_and_result(start_peer: Start, tool: Tool) -> None:
@@ -118,10 +118,10 @@ def test_action_goal_with_feedback_and_result(start_peer: Start, tool: Tool) -> 
 
 def test_action_timeout_cancels_the_goal_on_the_server(start_peer: Start, tool: Tool) -> None:
     """The timeout counts from the start, discovery included (a new Fast DDS participant may wait up to 3 s
-    for the server's next announcement), and the goal takes 9 s."""
+    for the server's next announcement, more on a loaded machine), and the goal takes 12 s."""
     peer = start_peer("--name", "fib", "--action", "/fibonacci", "--step", "0.3")
     sent = tool(
-        ["action", "send-goal", "/fibonacci", "test_msgs/action/Fibonacci", "{order: 30}", "--timeout", "5"]
+        ["action", "send-goal", "/fibonacci", "test_msgs/action/Fibonacci", "{order: 40}", "--timeout", "8"]
     )
     assert sent.returncode != 0
     assert "Goal finished with status: CANCELED" in sent.stdout
