@@ -37,4 +37,3 @@ def qos_options(func: Callable[..., Any]) -> Callable[..., Any]:
     for option in reversed(_QOS_OPTIONS):
         wrapper = option(wrapper)
     return wrapper
-

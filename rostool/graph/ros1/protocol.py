@@ -160,9 +160,7 @@ class ServerParameters:
         try:
             self.master.set_param(self.resolve(name), value)
         except OverflowError as err:
-            raise RostoolError(
-                f"{name}: integers must fit in 32 bits on the ROS 1 parameter server"
-            ) from err
+            raise RostoolError(f"{name}: integers must fit in 32 bits on the ROS 1 parameter server") from err
         except TypeError as err:
             why = f"this value cannot be stored on the parameter server ({err})"
             raise RostoolError(f"{name}: {why}") from err
