@@ -421,3 +421,17 @@ def test_ctrl_c_ends_a_waiting_service_call_quietly(
     out, err = stop(waiting, timeout=10)
     assert waiting.returncode == 130, err
     assert "Traceback" not in err and out == ""
+
+
+def test_a_service_type_rosbags_lacks_comes_from_the_class_rclpy_imports(
+    start_peer: Start, rclpy_tool: Tool
+) -> None:
+    """test_msgs/srv/BasicTypes is in no rosbags store and not built in: described from rclpy's classes, the
+    real server echoes the request back field by field."""
+    start_peer("--name", "echoer", "--echo-service", "/echo")
+    called = rclpy_tool("service", "call", "/echo", "test_msgs/srv/BasicTypes",
+                        "{int32_value: 5, string_value: hi, float64_value: 2.5}", "--json")  # fmt: skip
+    assert called.returncode == 0, called.stderr
+    got = json.loads(called.stdout)
+    fields = ("int32_value", "string_value", "float64_value", "bool_value")
+    assert [got[f] for f in fields] == [5, "hi", 2.5, False]

@@ -53,7 +53,7 @@ def ensure_known(types: Any, store_name: str) -> None:
         ensure_known(types, inner)
     text = "\n".join(f"{kind} {name}" for name, kind in fields)
     try:
-        types.register(get_types_from_msg(text, store_name))
+        types.register(_renamed(get_types_from_msg(text, store_name)))
     except Exception as err:  # a field rosbags' .msg reader does not take (wstring)
         raise RostoolError(
             f"type {store_name}: rostool cannot describe the class rclpy imports to rosbags "
@@ -62,6 +62,18 @@ def ensure_known(types: Any, store_name: str) -> None:
     defaults = default_values(python_class(store_name), fields)
     if defaults:
         types.sources.defaults[store_name] = defaults
+
+
+def _renamed(found: Any) -> Any:
+    """rosbags' .msg reader files `pkg/srv/X` (and `pkg/action/X`) under `pkg/srv/msg/X`: back to the names
+    rmw and the DDS backend use, in the keys and in the field types alike."""
+    if isinstance(found, str):
+        return found.replace("/srv/msg/", "/srv/").replace("/action/msg/", "/action/")
+    if isinstance(found, (tuple, list)):
+        return type(found)(_renamed(item) for item in found)
+    if isinstance(found, dict):
+        return {_renamed(key): _renamed(value) for key, value in found.items()}
+    return found
 
 
 def default_values(cls: Any, fields: list[tuple[str, str]]) -> dict[str, Any]:
