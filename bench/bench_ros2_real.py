@@ -57,8 +57,10 @@ def run_burst(distro: str, rate: int, count: int, verb: list[str]) -> None:
     print(f"{verb[1]} {label:>12}: sent {count} at {true_rate:,.0f} msg/s")
     raw_rate = (counted["count"] - 1) / (counted["last"] - counted["first"])
     missed = 100 * (count - counted["count"]) / count
-    print(f"  rclpy raw=True   {counted['count']:>7} ({missed:6.2f}% missed)"
-          f"  rate {raw_rate:>10,.1f} ({100 * abs(raw_rate - true_rate) / true_rate:6.2f}% error)")
+    print(
+        f"  rclpy raw=True   {counted['count']:>7} ({missed:6.2f}% missed)"
+        f"  rate {raw_rate:>10,.1f} ({100 * abs(raw_rate - true_rate) / true_rate:6.2f}% error)"
+    )
     if verb[1] == "hz":
         last = [json.loads(line) for line in out.splitlines() if line.startswith("{")][-1]
         got, rate_seen = last["received"], last["rate"]
@@ -82,8 +84,10 @@ def bench_list(distro: str, runs: int = 10) -> None:
             done = subprocess.run(rostool_cmd(*verb), env=env, capture_output=True, text=True, timeout=30)
             times.append(time.perf_counter() - start)
             complete += expected in done.stdout.split()
-        print(f"{' '.join(verb):<12} {complete}/{runs} complete  median {statistics.median(times):.2f} s  "
-              f"max {max(times):.2f} s")
+        print(
+            f"{' '.join(verb):<12} {complete}/{runs} complete  median {statistics.median(times):.2f} s  "
+            f"max {max(times):.2f} s"
+        )
     stop_all(graph)
 
 

@@ -1,6 +1,6 @@
 """`topic hz`, `topic echo` and start-up: rostool vs Debian's rostopic, side by side in one run.
 
-    .venv/bin/python bench/bench_topic.py [hz|echo|startup]...
+.venv/bin/python bench/bench_topic.py [hz|echo|startup]...
 """
 
 from __future__ import annotations

@@ -20,7 +20,7 @@ from tests.support import (
 )
 
 # the real ROS 2 peers' fixtures (distro, graph_env, start_peer)
-pytest_plugins = ("tests.ros2_peers",)
+pytest_plugins = ("tests.ros2_peers", "tests.ros2_backends")
 
 
 @pytest.fixture

@@ -156,7 +156,6 @@ def test_bad_input_on_a_real_graph(graph_env: dict[str, str], start_peer: Start)
         assert "Traceback" not in done.stderr
 
 
-
 def test_a_users_cyclonedds_uri_choosing_lo_wins(graph_env: dict[str, str], start_peer: Start) -> None:
     """A common set-up: LOCALHOST discovery and a CYCLONEDDS_URI that selects interface `lo` (Cyclone
     refuses an interface selected twice, so rostool leaves the interfaces to the user's file)."""
