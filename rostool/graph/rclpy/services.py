@@ -170,85 +170,36 @@ class ServiceVerbs:
         self: RclpyGraph, name: str, values: tuple[str, ...], wait: bool = False, timeout: float | None = None
     ) -> tuple[Any, Any]:
         """ros2 service call, as the DDS backend does it (its steps and its lines)."""
-        from rostool.graph.ros2.protocol import _SRV_TYPE, CALL_WAIT_SECONDS, _request_value
+        from rostool.graph.ros2_calls import call_service
 
-        resolved = self.resolve(name)
-        srv_type = values[0] if values and _SRV_TYPE.match(values[0]) else None
-        if srv_type is not None:
-            values = values[1:]
-        limit = timeout if timeout is not None else (math.inf if wait else CALL_WAIT_SECONDS)
-        deadline = time.monotonic() + limit
-        while srv_type is None:
-            srv_type = self.find_service_type(resolved)
-            if srv_type is None and (not wait or time.monotonic() >= deadline):
-                raise RostoolError(
-                    f"unknown service {resolved}: no server announces it (see `rostool service list`); "
-                    "give its TYPE after the name to wait for it with --wait"
-                )
-            if srv_type is None:
-                time.sleep(0.1)
-        client = self.service_client(resolved, srv_type)
-        request = self.build_message(client.request_type, _request_value(self, client.request_type, values))
-        remaining = max(deadline - time.monotonic(), 0.001)
-        if not client.wait_for_server(remaining):
-            announced, asked = self.find_service_type(resolved), client.request_type.removesuffix("_Request")
-            if announced is not None and announced != asked:
-                raise RostoolError(f"service {resolved} has type {announced}, not {asked}: call it with that")
-            hint = "" if wait else " (--wait waits for it)"
-            raise RostoolError(
-                f"service {resolved} is not available: no server matched within {limit:g} s{hint}"
-            )
-        return request, client.call(request, timeout if timeout is not None else math.inf)
+        return call_service(self, name, values, wait, timeout)
 
     def service_info(self: RclpyGraph, service: str) -> dict[str, Any] | None:
         """ros2 service info's facts, as the DDS backend gives them: from rmw's view of the service's two
         DDS topics (`rq/<name>Request`, `rr/<name>Reply`), which carry node, GID, QoS and type hash."""
+        from rostool.graph.rclpy.graph import _type_hash
         from rostool.graph.rclpy.qos import from_rclpy
+        from rostool.graph.ros2_calls import ServiceEndpoint, service_info_facts
 
         resolved = resolve(service)
         self.settle(require_peers=True)
         node, own = self.node, self._node_name
-        sides: dict[tuple[str, str, str], list[Any]] = {}
-        types: set[str] = set()
+        endpoints: list[ServiceEndpoint] = []
         for kind, topic in (("request", request_topic(resolved)), ("reply", reply_topic(resolved))):
             writers = node.get_publishers_info_by_topic(topic, no_mangle=True)
             readers = node.get_subscriptions_info_by_topic(topic, no_mangle=True)
             for is_writer, infos in ((True, writers), (False, readers)):
-                for info in infos:
-                    if info.node_name == own:
-                        continue
-                    is_client = is_writer == (kind == "request")
-                    full = self._full_name(info.node_name, info.node_namespace)
-                    sides.setdefault(("CLIENT" if is_client else "SERVER", full, kind), []).append(
-                        (info, is_writer)
+                endpoints += [
+                    ServiceEndpoint(
+                        kind=kind, node=self._full_name(info.node_name, info.node_namespace),
+                        is_writer=is_writer, service_type=_service_type_of(info.topic_type),
+                        type_hash=_type_hash(info), gid=bytes(info.endpoint_gid).hex("."),
+                        qos=vars(from_rclpy(info.qos_profile)),
                     )
-                    if kind == "request":
-                        types.add(_service_type_of(info.topic_type))
-        if not sides:
-            return None
-        found: dict[str, Any] = {"name": resolved, "types": sorted(types), "clients": [], "servers": []}
-        for role, full in sorted({(role, full) for role, full, _ in sides}):
-            requests = sides.get((role, full, "request"), [])
-            replies = sides.get((role, full, "reply"), [])
-            for index in range(max(len(requests), len(replies))):
-                pair = {
-                    "request": requests[index] if index < len(requests) else None,
-                    "reply": replies[index] if index < len(replies) else None,
-                }
-                first = pair["request"] or pair["reply"]
-                assert first is not None
-                from rostool.graph.rclpy.graph import _type_hash
-
-                found["clients" if role == "CLIENT" else "servers"].append({
-                    "node": full, "endpoint_type": role, "type": _service_type_of(first[0].topic_type),
-                    "type_hash": _type_hash(first[0]),
-                    "endpoints": {
-                        kind: {"gid": bytes(e[0].endpoint_gid).hex("."), "is_writer": e[1],
-                               "qos": vars(from_rclpy(e[0].qos_profile)).copy()}
-                        for kind, e in pair.items() if e is not None
-                    },
-                })  # fmt: skip
-        return found
+                    for info in infos
+                    if info.node_name != own
+                ]  # fmt: skip
+        return service_info_facts(resolved, endpoints)
 
 
 def _service_type_of(topic_type: str) -> str:

@@ -34,6 +34,7 @@ from rostool.graph.ros2.discovery import (
 from rostool.graph.ros2.names import resolve, service_type, topic_to_dds, type_to_dds
 from rostool.graph.ros2.protocol import Ros2Verbs
 from rostool.graph.ros2.types import TypeSupport, distro_from_env, gid_size
+from rostool.graph.ros2_calls import ServiceEndpoint, service_info_facts
 
 if TYPE_CHECKING:
     from rostool.graph.recording import Encoding
@@ -425,40 +426,16 @@ class Ros2Graph(Ros2Verbs):
         resolved = resolve(service)
         cache = self._settled(require_peers=True, nodes=True)
         owners = self._owners(cache)
-        # rmw_cyclonedds_cpp: a client writes requests and reads replies, a server the other way round
-        sides: dict[tuple[str, str, str], list[Endpoint]] = {}
-        types: set[str] = set()
-        for endpoint in cache.remote_endpoints():
-            ros = endpoint.ros
-            if ros is None or ros[1] != resolved or ros[0] not in ("request", "reply"):
-                continue
-            is_client = endpoint.is_writer == (ros[0] == "request")
-            node = owners.get(endpoint.guid, UNKNOWN_NODE)
-            sides.setdefault(("CLIENT" if is_client else "SERVER", node, ros[0]), []).append(endpoint)
-            if ros[0] == "request":
-                types.add(service_type(endpoint.type_name))
-        if not sides:
-            return None
-        found: dict[str, Any] = {"name": resolved, "types": sorted(types), "clients": [], "servers": []}
-        for role, node in sorted({(role, node) for role, node, _ in sides}):
-            requests = sides.get((role, node, "request"), [])
-            replies = sides.get((role, node, "reply"), [])
-            for index in range(max(len(requests), len(replies))):
-                pair = {
-                    "request": requests[index] if index < len(requests) else None,
-                    "reply": replies[index] if index < len(replies) else None,
-                }
-                first = pair["request"] or pair["reply"]
-                assert first is not None
-                found["clients" if role == "CLIENT" else "servers"].append({
-                    "node": node, "endpoint_type": role, "type": service_type(first.type_name),
-                    "type_hash": first.type_hash,
-                    "endpoints": {
-                        kind: {"gid": e.guid.hex("."), "is_writer": e.is_writer, "qos": vars(e.qos).copy()}
-                        for kind, e in pair.items() if e is not None
-                    },
-                })  # fmt: skip
-        return found
+        endpoints = (
+            ServiceEndpoint(
+                kind=ros[0], node=owners.get(endpoint.guid, UNKNOWN_NODE), is_writer=endpoint.is_writer,
+                service_type=service_type(endpoint.type_name), type_hash=endpoint.type_hash,
+                gid=endpoint.guid.hex("."), qos=vars(endpoint.qos),
+            )
+            for endpoint in cache.remote_endpoints()
+            if (ros := endpoint.ros) is not None and ros[1] == resolved and ros[0] in ("request", "reply")
+        )  # fmt: skip
+        return service_info_facts(resolved, endpoints)
 
     def find_service_type(self, service: str) -> str | None:
         """The type a server of `service` announces (`pkg/srv/Name`), None when no server is seen."""

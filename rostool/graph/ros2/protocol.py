@@ -3,9 +3,6 @@ wrappers over services.py, actions.py, params.py and dds.py."""
 
 from __future__ import annotations
 
-import math
-import re
-import time
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
@@ -13,14 +10,12 @@ from rostool.errors import RostoolError
 from rostool.graph.base import hidden_name
 from rostool.graph.recording import Encoding, Put, subscribed_by
 from rostool.graph.ros2 import actions, dds, params
+from rostool.graph.ros2_calls import call_service
 
 if TYPE_CHECKING:
     from rostool.graph.base import GoalWatcher, Received
     from rostool.graph.qos import QosRequest
     from rostool.graph.ros2.graph import Ros2Graph
-
-_SRV_TYPE = re.compile(r"[A-Za-z]\w*/(srv/)?[A-Za-z]\w*\Z")
-CALL_WAIT_SECONDS = 5.0  # how long `call` gives a seen (or given) service's server to match without --wait
 
 
 def ros1_only(what: str) -> RostoolError:
@@ -67,35 +62,7 @@ class Ros2Verbs:
     def service_call(
         self: Ros2Graph, name: str, values: tuple[str, ...], wait: bool = False, timeout: float | None = None
     ) -> tuple[Any, Any]:
-        """ros2 service call: find the type (an optional TYPE before the values, or the one announced),
-        build the request, wait for the server, call."""
-        resolved = self.resolve(name)
-        srv_type = values[0] if values and _SRV_TYPE.match(values[0]) else None
-        if srv_type is not None:
-            values = values[1:]
-        limit = timeout if timeout is not None else (math.inf if wait else CALL_WAIT_SECONDS)
-        deadline = time.monotonic() + limit
-        while srv_type is None:
-            srv_type = self.find_service_type(resolved)
-            if srv_type is None and (not wait or time.monotonic() >= deadline):
-                raise RostoolError(
-                    f"unknown service {resolved}: no server announces it (see `rostool service list`); "
-                    "give its TYPE after the name to wait for it with --wait"
-                )
-            if srv_type is None:
-                time.sleep(0.1)
-        client = self.service_client(resolved, srv_type)
-        request = self.build_message(client.request_type, _request_value(self, client.request_type, values))
-        remaining = max(deadline - time.monotonic(), 0.001)
-        if not client.wait_for_server(remaining):
-            announced, asked = self.find_service_type(resolved), client.request_type.removesuffix("_Request")
-            if announced is not None and announced != asked:
-                raise RostoolError(f"service {resolved} has type {announced}, not {asked}: call it with that")
-            hint = "" if wait else " (--wait waits for it)"
-            raise RostoolError(
-                f"service {resolved} is not available: no server matched within {limit:g} s{hint}"
-            )
-        return request, client.call(request, timeout if timeout is not None else math.inf)
+        return call_service(self, name, values, wait, timeout)
 
     # --- actions ------------------------------------------------------------------------------
     def actions(self: Ros2Graph) -> list[Any]:
@@ -190,23 +157,3 @@ class Ros2Source:
 
     def close(self) -> None:
         self.graph.close()
-
-
-def _request_value(graph: Ros2Graph, request_type: str, values: tuple[str, ...]) -> Any:
-    """One YAML mapping, or the request fields in order (as `rosservice call` takes them)."""
-    from rostool.interfaces.values import call_args
-    from rostool.output.plain import field_names
-
-    parsed = call_args(values)
-    if not parsed:
-        return {}
-    if len(parsed) == 1 and isinstance(parsed[0], dict):
-        return parsed[0]
-    fields = field_names(graph.message_class(request_type))
-    if len(parsed) != len(fields):
-        srv = request_type.removesuffix("_Request")
-        raise RostoolError(
-            f"{srv} takes {len(fields)} request value(s) in this order: {' '.join(fields) or '(none)'}; "
-            f"got {len(parsed)}. Give them in order or as one YAML mapping"
-        )
-    return dict(zip(fields, parsed, strict=True))
