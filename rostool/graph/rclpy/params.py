@@ -4,7 +4,7 @@ lines) with its rcl_interfaces service calls made by rclpy's generic clients."""
 from __future__ import annotations
 
 import time
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from rostool.errors import RostoolError
 from rostool.graph.ros2 import params
@@ -16,23 +16,6 @@ if TYPE_CHECKING:
 
 class RclpyParameters(NodeParameters):
     _graph: RclpyGraph
-
-    def _call(self, verb: str, request: dict[str, Any]) -> Any:
-        from rostool.interfaces.fill import build_message
-
-        client = self._clients.get(verb)
-        if client is None:
-            if not self._clients:
-                self._check_node()
-            srv_type = "rcl_interfaces/srv/" + "".join(w.capitalize() for w in verb.split("_"))
-            client = self._clients[verb] = self._graph.service_client(f"{self.node}/{verb}", srv_type)
-        if not client.wait_for_server(self._timeout):
-            raise RostoolError(
-                f"node {self.node} does not serve {verb}: no server of {client.service} matched within "
-                f"{self._timeout:g} s (see `rostool service list`)"
-            )
-        store = self._graph.types.store
-        return client.call(build_message(store, client.request_type, request), self._timeout)
 
     def _check_node(self) -> None:
         """Fail at once, after discovery settles, when the node serves no `<node>/...` service (the DDS

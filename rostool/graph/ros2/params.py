@@ -100,14 +100,12 @@ class ParameterClient:
         self._clients: dict[str, Any] = {}
 
     def _call(self, verb: str, request: dict[str, Any]) -> Any:
-        from rostool.graph.ros2.services import ServiceClient
-
         client = self._clients.get(verb)
         if client is None:
             if not self._clients:
                 self._check_node()
             srv_type = "rcl_interfaces/srv/" + "".join(w.capitalize() for w in verb.split("_"))
-            client = self._clients[verb] = ServiceClient(self._graph.session, f"{self.node}/{verb}", srv_type)
+            client = self._clients[verb] = self._graph.service_client(f"{self.node}/{verb}", srv_type)
         if not client.wait_for_server(self._timeout):
             raise RostoolError(
                 f"node {self.node} does not serve {verb}: no server of {client.service} matched within "
