@@ -311,12 +311,8 @@ def set_(
         for param_name, text in zip(pairs[::2], pairs[1::2], strict=True):
             parsed = _read_text(text) if textfile else parse_yaml(text, f"the value of {param_name}")
             ok, reason = params.set(param_name, parsed)
-            line = ("Set parameter successful" if ok else "Setting parameter failed") + (
-                f": {reason}" if reason else "")  # fmt: skip
-            if len(pairs) == 2 and not ok:
-                raise RostoolError(f"{line} (parameter {param_name} of {params.node})")  # the command's error
-            click.echo(f"{param_name}: {line}" if len(pairs) > 2 else line, err=not ok)
-            failed += not ok
+            outcome = "Set parameter successful" if ok else "Setting parameter failed"
+            failed += not _report(ok, outcome, reason, param_name, params.node, several=len(pairs) > 2)
     if failed:
         ctx.exit(1)
 
@@ -396,12 +392,8 @@ def delete(
         failed = 0
         for param_name in param_names:
             ok, reason = params.delete(param_name)
-            line = ("Deleted parameter successfully" if ok else "Deleting parameter failed") + (
-                f": {reason}" if reason else "")  # fmt: skip
-            if len(param_names) == 1 and not ok:
-                raise RostoolError(f"{line} (parameter {param_name} of {params.node})")  # the command's error
-            click.echo(f"{param_name}: {line}" if len(param_names) > 1 else line, err=not ok)
-            failed += not ok
+            outcome = "Deleted parameter successfully" if ok else "Deleting parameter failed"
+            failed += not _report(ok, outcome, reason, param_name, params.node, several=len(param_names) > 1)
     if failed:
         ctx.exit(1)
 
@@ -531,3 +523,13 @@ def _read_document(file: str) -> Any:
 
     text = sys.stdin.read() if file == "-" else _read_text(file)
     return parse_yaml(text, file)
+
+
+def _report(ok: bool, outcome: str, reason: str, name: str, node: str, several: bool) -> bool:
+    """ros2 param set/delete's line for one parameter (prefixed by its name when several are given); a
+    single parameter's failure is the command's one error line."""
+    line = outcome + (f": {reason}" if reason else "")
+    if not several and not ok:
+        raise RostoolError(f"{line} (parameter {name} of {node})")
+    click.echo(f"{name}: {line}" if several else line, err=not ok)
+    return ok
