@@ -21,7 +21,8 @@ fi
 # The real ROS 2 peers: rclpy with Fast DDS (rmw_fastrtps_cpp) and the message packages the tests use, one
 # venv per distro, cached outside the repo (ROSTOOL_PEERS_DIR) and reinstalled only when this list changes.
 export ROSTOOL_PEERS_DIR="${ROSTOOL_PEERS_DIR:-$HOME/.cache/rostool/peers}"
-ros2_messages=(std-msgs std-srvs test-msgs geometry-msgs sensor-msgs nav-msgs)
+ros2_messages=(std-msgs std-srvs test-msgs geometry-msgs sensor-msgs nav-msgs lifecycle-msgs rcl-interfaces
+  action-msgs ament-index-python)
 for distro in jazzy kilted; do
   peer_packages=("ros-$distro-rclpy" "ros-$distro-rmw-fastrtps-cpp" "${ros2_messages[@]/#/ros-$distro-}")
   venv="$ROSTOOL_PEERS_DIR/$distro"
@@ -36,6 +37,31 @@ for distro in jazzy kilted; do
   # run, since the checkout may have moved and the dependencies may have changed
   "$venv/bin/python" -m pip install -q --disable-pip-version-check -e .
 done
+
+# The real `ros2` (ros2cli of Jazzy, pure Python, not on pip) beside the Jazzy peers, as the referee of rostool's
+# ROS 2 output (../shared/referees/README.md). Reinstalled when its source changes; built from a copy, since
+# pip builds in the source tree and shared/ may be read-only.
+ros2cli_src="$(cd .. && pwd)/shared/referees/ros2cli-jazzy"
+jazzy_venv="$ROSTOOL_PEERS_DIR/jazzy"
+if [ -d "$ros2cli_src" ]; then
+  ros2cli_stamp="$(cd "$ros2cli_src" && find . -type f | sort | xargs md5sum | md5sum | cut -d' ' -f1)"
+  if [ "$(cat "$jazzy_venv/.ros2cli" 2>/dev/null)" != "$ros2cli_stamp" ]; then
+    echo "test.sh: installing the real ros2 (ros2cli Jazzy) into $jazzy_venv"
+    build_dir="$(mktemp -d)"
+    cp -r "$ros2cli_src"/. "$build_dir"
+    chmod -R u+w "$build_dir"
+    "$jazzy_venv/bin/python" -m pip install -q --disable-pip-version-check \
+      argcomplete packaging psutil pyyaml numpy setuptools
+    (cd "$build_dir" && "$jazzy_venv/bin/python" -m pip install -q --disable-pip-version-check --no-deps \
+      --no-build-isolation ./rosidl_runtime_py ./ros2cli ./ros2node ./ros2service ./ros2topic ./ros2param \
+      ./ros2action ./ros2interface ./ros2lifecycle)
+    rm -rf "$build_dir"
+    echo "$ros2cli_stamp" > "$jazzy_venv/.ros2cli"
+  fi
+elif [ -n "${CI:-}" ]; then
+  echo "test.sh: $ros2cli_src is missing: the real ros2 (the referee of the ROS 2 output) cannot be installed" >&2
+  exit 1
+fi
 
 if [ ! -x .venv/bin/python ]; then
   python3 -m venv .venv

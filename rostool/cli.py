@@ -30,6 +30,13 @@ COMMANDS: dict[str, tuple[str, str, str]] = {
     "action": ("rostool.commands.action", "action", "List actions, send goals, follow feedback, cancel."),
     "bag": ("rostool.commands.bag", "bag", "Inspect, play, record and convert bags (.bag, .db3, .mcap)."),
     "graph": ("rostool.commands.graph", "graph", "Show the node/topic graph as text, DOT, JSON, SVG or PNG."),
+    "daemon": (
+        "rostool.commands.daemon",
+        "daemon",
+        "Start, stop and query the ROS 2 graph daemon that makes listings answer at once.",
+    ),
+    "lifecycle": ("rostool.commands.lifecycle", "lifecycle", "Get and change ROS 2 lifecycle nodes' states."),
+    "console": ("rostool.commands.console", "console", "Follow log output and get or set nodes' logger levels."),
     "doctor": (
         "rostool.commands.doctor",
         "doctor",

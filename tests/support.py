@@ -74,6 +74,9 @@ def ros2_env(**extra: str) -> dict[str, str]:
         ROS_DOMAIN_ID=str(domain),
         ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST",
         PYTHONUNBUFFERED="1",
+        # one test, one domain: a graph daemon per domain would outlive its test; the daemon's own tests
+        # pass ROSTOOL_NO_DAEMON="" to use it
+        ROSTOOL_NO_DAEMON="1",
         **extra,
     )
     assert "127.0.0.1" in cyclone_config(env)  # never anything but loopback
