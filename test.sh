@@ -51,7 +51,7 @@ if [ -d "$ros2cli_src" ]; then
     cp -r "$ros2cli_src"/. "$build_dir"
     chmod -R u+w "$build_dir"
     "$jazzy_venv/bin/python" -m pip install -q --disable-pip-version-check \
-      argcomplete packaging psutil pyyaml numpy setuptools
+      argcomplete packaging psutil pyyaml numpy setuptools wheel
     (cd "$build_dir" && "$jazzy_venv/bin/python" -m pip install -q --disable-pip-version-check --no-deps \
       --no-build-isolation ./rosidl_runtime_py ./ros2cli ./ros2node ./ros2service ./ros2topic ./ros2param \
       ./ros2action ./ros2interface ./ros2lifecycle)

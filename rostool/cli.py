@@ -36,7 +36,11 @@ COMMANDS: dict[str, tuple[str, str, str]] = {
         "Start, stop and query the ROS 2 graph daemon that makes listings answer at once.",
     ),
     "lifecycle": ("rostool.commands.lifecycle", "lifecycle", "Get and change ROS 2 lifecycle nodes' states."),
-    "console": ("rostool.commands.console", "console", "Follow log output and get or set nodes' logger levels."),
+    "console": (
+        "rostool.commands.console",
+        "console",
+        "Follow log output and get or set nodes' logger levels.",
+    ),
     "doctor": (
         "rostool.commands.doctor",
         "doctor",
