@@ -65,15 +65,41 @@ def open_graph(
     version = select_ros_version(explicit_version)
     interface_paths = tuple(interface_paths) or interface_paths_from_env()
     if version == 2:
-        from rostool.graph.rclpy.select import choose
+        backend = ros2_backend or selected_ros2_backend()
 
-        if choose(ros2_backend or selected_ros2_backend()).backend == "rclpy":
-            from rostool.graph.rclpy.graph import RclpyGraph
+        def direct() -> Graph:
+            return _ros2_graph(backend, node_name, interface_paths)
 
-            return RclpyGraph(node_name, interface_paths=interface_paths)
-        from rostool.graph.ros2.graph import Ros2Graph
+        if not daemon_wanted():
+            return direct()
+        from rostool.graph.daemon.graph import daemon_graph
 
-        return Ros2Graph(node_name, interface_paths=interface_paths)
+        return daemon_graph(backend, direct)
     from rostool.graph.ros1.graph import Ros1Graph
 
     return Ros1Graph(node_name, interface_paths)
+
+
+def _ros2_graph(backend: str | None, node_name: str, interface_paths: Sequence[str]) -> Graph:
+    from rostool.graph.rclpy.select import choose
+
+    if choose(backend).backend == "rclpy":
+        from rostool.graph.rclpy.graph import RclpyGraph
+
+        return RclpyGraph(node_name, interface_paths=interface_paths)
+    from rostool.graph.ros2.graph import Ros2Graph
+
+    return Ros2Graph(node_name, interface_paths=interface_paths)
+
+
+def daemon_wanted() -> bool:
+    """Whether ROS 2 graph queries may go through the user's graph daemon: not with ROSTOOL_NO_DAEMON=1
+    nor with the running verb's `--no-daemon` (ros2cli's flag, which the verbs accept)."""
+    from rostool.graph.daemon import NO_DAEMON_ENV
+
+    if os.environ.get(NO_DAEMON_ENV, "").strip() not in ("", "0"):
+        return False
+    import click
+
+    ctx = click.get_current_context(silent=True)
+    return not (ctx is not None and ctx.params.get("no_daemon"))

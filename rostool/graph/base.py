@@ -46,6 +46,16 @@ class NodeInfo:
     service_clients: list[tuple[str, str]] = field(default_factory=list)
 
 
+@dataclass
+class ActionSummary:
+    """An action as the listing verbs see it: its type and the nodes serving and calling it."""
+
+    name: str
+    type: str
+    servers: list[str]
+    clients: list[str]
+
+
 class Received:
     """One message as it arrived: raw bytes plus the decoder of its connection, used on demand."""
 
@@ -151,7 +161,7 @@ class Graph(Protocol):
     def service_call(self, name: str, values: tuple[str, ...], wait: bool, timeout: float | None) -> Any: ...
 
     # actions: summaries have name, type, servers, clients
-    def actions(self) -> list[Any]: ...
+    def actions(self) -> list[ActionSummary]: ...
     def action_info(self, name: str, wait: float) -> dict[str, Any]: ...
     # follow a goal to its result (canceled first on timeout or Ctrl+C); the outcome has `.succeeded`
     def send_goal(

@@ -66,6 +66,8 @@ class RclpyGraph(ServiceVerbs, ParameterVerbs, ActionVerbs, BagVerbs, Refusals):
         self._context: RclpyContext | None = None
         self._lock = threading.Lock()
         self._settled = False
+        self.require_peers = True  # False: an empty graph lists nothing instead of failing (the daemon)
+        self._long_lived = False  # the daemon's graph: settled once, then rmw keeps it current
         self._subscriptions: list[Any] = []
 
     @property
@@ -130,6 +132,8 @@ class RclpyGraph(ServiceVerbs, ParameterVerbs, ActionVerbs, BagVerbs, Refusals):
     def settle(self, require_peers: bool = False, until: Callable[[], bool] | None = None) -> bool:
         """Wait until the graph stops changing (once per process) or `until()`; whether anything other
         than this process was seen."""
+        if self._long_lived:
+            return True
         started = time.monotonic()
         last = self._snapshot()
         baseline = {name for name, _types in last[1]}  # this node's own topics (/parameter_events)
@@ -146,7 +150,7 @@ class RclpyGraph(ServiceVerbs, ParameterVerbs, ActionVerbs, BagVerbs, Refusals):
                 self._settled = True
                 return True
             if not found and now - started >= SETTLE_MAX_SECONDS:
-                if require_peers:
+                if require_peers and self.require_peers:
                     raise RostoolError(
                         f"no ROS 2 nodes found on domain {dds.domain_id()} within {SETTLE_MAX_SECONDS:g} s "
                         f"(rclpy backend): is anything running with this ROS_DOMAIN_ID? {self._range_hint()}"
@@ -156,6 +160,14 @@ class RclpyGraph(ServiceVerbs, ParameterVerbs, ActionVerbs, BagVerbs, Refusals):
             current = self._snapshot()
             if current != last:
                 last, changed = current, time.monotonic()
+
+    def wait_for_discovery(self) -> None:
+        """Let discovery settle once: a long-lived graph (the daemon's) then answers at once."""
+        self.settle()
+        self._long_lived = True
+
+    def wait_for_newcomers(self, limit: float = 1.0) -> None:
+        """rmw folds in what discovery brings on its own threads: nothing to wait for."""
 
     @staticmethod
     def _range_hint() -> str:

@@ -192,6 +192,7 @@ class GraphCache:
         self.nodes: dict[bytes, list[NodeEntry]] = {}  # participant GUID -> its nodes
         self.started = time.monotonic()
         self.changed = self.started
+        self.long_lived = False  # settled once (the daemon's cache): later settles only poll
 
     def poll(self) -> bool:
         from cyclonedds.core import InstanceState
@@ -268,6 +269,10 @@ class GraphCache:
         found. A participant that is seen is not yet described: Fast DDS answers Cyclone's first
         request for its endpoints only on its next heartbeat (about 1 s later) and sends ros_discovery_info
         on the heartbeat after that (up to 3 s), so waiting for quiet alone returns an empty graph."""
+        if self.long_lived:
+            self.poll()
+            with self._lock:
+                return any(key != self.own for key in self.participants)
         while True:
             self.poll()
             now = time.monotonic()
@@ -280,6 +285,15 @@ class GraphCache:
             if remote and elapsed >= minimum and now - self.changed >= quiet / 3 and self._described(nodes):
                 return remote
             time.sleep(0.05)
+
+    def await_described(self, limit: float, nodes: bool = True) -> None:
+        """Poll; then, for at most `limit` seconds, wait for participants seen within ENDPOINTS_GRACE to
+        describe themselves (a long-lived cache's `settle`)."""
+        deadline = time.monotonic() + limit
+        self.poll()
+        while time.monotonic() < deadline and not self._described(nodes):
+            time.sleep(0.02)
+            self.poll()
 
     def _described(self, nodes: bool) -> bool:
         """Every ROS 2 participant has both a reader and a writer (rmw creates ros_discovery_info's pair

@@ -181,6 +181,7 @@ class Ros2Graph(Ros2Verbs):
         self._subscriptions: list[_Subscription] = []
         self._type_server: TypeDescriptionServer | None = None
         self._learn_lock = threading.Lock()  # one fetch per type when several subscriptions meet it
+        self.require_peers = True  # False: an empty graph lists nothing instead of failing (the daemon)
 
     @property
     def session(self) -> Session:
@@ -217,7 +218,7 @@ class Ros2Graph(Ros2Verbs):
     def _settled(self, require_peers: bool, nodes: bool = False) -> GraphCache:
         cache = self.session.cache
         found = cache.settle(maximum=NODES_MAX_SECONDS if nodes else SETTLE_MAX_SECONDS, nodes=nodes)
-        if require_peers and not found:
+        if require_peers and self.require_peers and not found:
             participant = self.session.participant
             raise RostoolError(
                 f"no ROS 2 participants found on domain {participant.domain_id} within "
@@ -225,6 +226,17 @@ class Ros2Graph(Ros2Verbs):
                 "ROS_DOMAIN_ID? Nodes on other machines need ROS_AUTOMATIC_DISCOVERY_RANGE=SUBNET"
             )
         return cache
+
+    def wait_for_discovery(self) -> None:
+        """Let discovery settle once: a long-lived graph (the daemon's) then answers at once."""
+        cache = self.session.cache
+        cache.settle(maximum=NODES_MAX_SECONDS, nodes=True)
+        cache.long_lived = True
+
+    def wait_for_newcomers(self, limit: float = 1.0) -> None:
+        """Fold in what discovery brought, waiting (at most `limit`) for participants that appeared a
+        moment ago to describe their endpoints and nodes."""
+        self.session.cache.await_described(limit)
 
     def _owners(self, cache: GraphCache) -> dict[bytes, str]:
         return cache.node_of()

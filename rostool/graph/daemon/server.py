@@ -1,0 +1,245 @@
+"""The daemon process: one long-lived graph of the selected backend, its read-only queries served on a
+Unix-domain socket (0600, in the user's 0700 directory); no TCP or UDP port of its own.
+
+Life: take the key's lock (held until exit: a second daemon of the same key waits or gives up), open the
+graph and let discovery settle, then bind the socket; clients meanwhile find the lock held and answer
+directly. It exits after `--idle` seconds without a request, on `daemon stop`, on SIGTERM, and when a
+client of another build asks (that client starts the replacement), removing its socket.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import fcntl
+import logging
+import os
+import signal
+import socket
+import sys
+import threading
+import time
+from collections.abc import Iterator
+from pathlib import Path
+from typing import IO, Any
+
+from rostool.errors import RostoolError
+from rostool.graph.daemon import wire
+from rostool.graph.daemon.place import DaemonPlace, build_id, daemon_place
+from rostool.graph.daemon.queries import SERVED
+
+DEFAULT_IDLE_SECONDS = 7200.0  # as ros2 daemon's default timeout
+IDLE_ENV = "ROSTOOL_DAEMON_IDLE"
+LOCK_WAIT_SECONDS = 10.0  # a replaced daemon's time to go
+CLIENT_SECONDS = 5.0  # how long one client may take to send its request or read the answer
+MAX_CLIENTS = 256
+NODE_NAME = "_rostool_daemon"  # hidden (a leading `_`), as ros2cli's own daemon node
+log = logging.getLogger("rostool.daemon")
+
+
+class Daemon:
+    def __init__(self, place: DaemonPlace, requested: str, idle: float) -> None:
+        self.place = place
+        self.requested = requested
+        self.idle = idle
+        self.build = build_id()
+        self.started = time.monotonic()
+        self.last_request = self.started
+        self.stopping = threading.Event()
+        self.graph_lock = threading.Lock()
+        self.clients = threading.BoundedSemaphore(MAX_CLIENTS)
+        self.backend = ""
+        self.graph: Any = None
+
+    # --- the graph -------------------------------------------------------------------------------
+    def open_graph(self) -> None:
+        from rostool.graph.rclpy.select import choose
+
+        self.backend = choose(None if self.requested == "auto" else self.requested).backend
+        if self.backend == "rclpy":
+            from rostool.graph.rclpy.graph import RclpyGraph
+
+            self.graph = RclpyGraph(NODE_NAME)
+        else:
+            from rostool.graph.ros2.graph import Ros2Graph
+
+            self.graph = Ros2Graph(NODE_NAME)
+        self.graph.require_peers = False  # an empty graph is an empty answer, as ros2's daemon gives
+        self.graph.wait_for_discovery()
+        log.info("graph of %s (%s backend) ready", dict(self.place.fields)["domain"], self.backend)
+
+    def answer(self, request: dict[str, Any]) -> dict[str, Any]:
+        op = request.get("op")
+        if op == "status":
+            return {"ok": self.status()}
+        if op == "stop":
+            self.stopping.set()
+            return {"ok": True}
+        if op != "query":
+            return {"error": f"graph daemon: unknown request {op!r}"}
+        if request.get("build") != self.build:
+            log.info("a client of build %s asked: this daemon (%s) stops", request.get("build"), self.build)
+            self.stopping.set()
+            return {"build": self.build}
+        method, args = request.get("method"), request.get("args", [])
+        served = SERVED.get(str(method))
+        if served is None or not isinstance(args, list):
+            return {"error": f"graph daemon: {method!r} is not a query it answers"}
+        try:
+            with self.graph_lock:
+                self.graph.wait_for_newcomers()
+                return {"ok": served[0](getattr(self.graph, str(method))(*args))}
+        except RostoolError as err:
+            return {"error": str(err)}
+
+    def status(self) -> dict[str, Any]:
+        with self.graph_lock:
+            size = {
+                "nodes": len(self.graph.node_names()),
+                "topics": len(self.graph.topics()),
+                "services": len(self.graph.services()),
+                "actions": len(self.graph.actions()),
+            }
+        uptime = round(time.monotonic() - self.started, 3)
+        return {
+            "running": True, "pid": os.getpid(), "socket": str(self.place.socket), "backend": self.backend,
+            "domain": int(dict(self.place.fields)["domain"]), "uptime": uptime,
+            "build": self.build, "log": str(self.place.log), "graph": size, "key": dict(self.place.fields),
+        }  # fmt: skip
+
+    # --- the socket ------------------------------------------------------------------------------
+    def serve(self) -> None:
+        listener = bind(self.place.socket)
+        identity = os.stat(self.place.socket).st_ino
+        log.info("listening on %s", self.place.socket)
+        threading.Thread(target=self._keep_current, name="poll", daemon=True).start()
+        try:
+            while not self.stopping.is_set():
+                if time.monotonic() - self.last_request > self.idle:
+                    log.info("idle for %g s: exiting", self.idle)
+                    break
+                try:
+                    connection, _ = listener.accept()
+                except TimeoutError:
+                    continue
+                except OSError:
+                    if self.stopping.is_set():
+                        break
+                    raise
+                self.last_request = time.monotonic()
+                if not self.clients.acquire(blocking=False):
+                    connection.close()
+                    continue
+                threading.Thread(target=self._client, args=(connection,), daemon=True).start()
+        finally:
+            listener.close()
+            with contextlib.suppress(OSError):
+                if os.stat(self.place.socket).st_ino == identity:  # not a successor's socket
+                    os.unlink(self.place.socket)
+
+    def _keep_current(self) -> None:
+        """Fold in discovery's news between queries, so the graph's memory follows the graph."""
+        while not self.stopping.wait(0.25):
+            with self.graph_lock:
+                self.graph.wait_for_newcomers(0.0)
+
+    def _client(self, connection: socket.socket) -> None:
+        try:
+            with connection:
+                connection.settimeout(CLIENT_SECONDS)
+                request = wire.receive(connection)
+                reply = self.answer(request) if isinstance(request, dict) else {"error": "bad request"}
+                wire.send(connection, reply)
+        except wire.WireError as err:
+            log.info("client dropped: %s", err)
+        except Exception:
+            log.exception("failed to answer")
+        finally:
+            self.last_request = time.monotonic()
+            self.clients.release()
+
+    def close(self) -> None:
+        if self.graph is not None:
+            with contextlib.suppress(Exception):
+                self.graph.close()
+
+
+def bind(path: Path) -> socket.socket:
+    """The listening socket, 0600 from its creation (umask), replacing a stale file of a dead daemon."""
+    with contextlib.suppress(FileNotFoundError):
+        os.unlink(path)
+    listener = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+    old_umask = os.umask(0o177)
+    try:
+        listener.bind(str(path))
+    finally:
+        os.umask(old_umask)
+    os.chmod(path, 0o600)
+    listener.listen(128)
+    listener.settimeout(0.5)
+    return listener
+
+
+@contextlib.contextmanager
+def held_lock(place: DaemonPlace) -> Iterator[IO[str] | None]:
+    """The key's lock, with this pid written in it; None when another daemon keeps it too long."""
+    handle = open(place.lock, "a+", encoding="utf-8")  # noqa: SIM115 (held for the daemon's life)
+    os.chmod(place.lock, 0o600)
+    deadline = time.monotonic() + LOCK_WAIT_SECONDS
+    try:
+        while True:
+            try:
+                fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                break
+            except BlockingIOError:
+                if time.monotonic() > deadline:
+                    yield None
+                    return
+                time.sleep(0.05)
+        handle.truncate(0)
+        handle.write(f"{os.getpid()}\n")
+        handle.flush()
+        yield handle
+    finally:
+        handle.close()
+
+
+def _setup_log() -> None:
+    """stderr is the daemon's log file (its starter opened it there), so the middleware's own messages land
+    in it too."""
+    logging.basicConfig(
+        stream=sys.stderr, level=logging.INFO, format=f"%(asctime)s [{os.getpid()}] %(levelname)s %(message)s"
+    )
+
+
+def run(requested: str, idle: float) -> int:
+    place = daemon_place(requested)
+    _setup_log()
+    daemon = Daemon(place, requested, idle)
+    signal.signal(signal.SIGTERM, lambda *_: daemon.stopping.set())
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # detached: only `daemon stop` or SIGTERM end it
+    signal.signal(signal.SIGHUP, signal.SIG_IGN)
+    with held_lock(place) as lock:
+        if lock is None:
+            log.error("another daemon keeps %s: not starting", place.lock)
+            return 1
+        log.info("starting (build %s, key %s)", daemon.build, dict(place.fields))
+        try:
+            daemon.open_graph()
+            if not daemon.stopping.is_set():
+                daemon.serve()
+        except RostoolError as err:
+            log.error("%s", err)
+            return 1
+        finally:
+            daemon.close()
+            log.info("stopped")
+    return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m rostool.graph.daemon")
+    parser.add_argument("--backend", choices=("auto", "rclpy", "dds"), default="auto")
+    parser.add_argument("--idle", type=float, default=float(os.environ.get(IDLE_ENV) or DEFAULT_IDLE_SECONDS))
+    args = parser.parse_args(argv)
+    return run(args.backend, args.idle)
