@@ -212,14 +212,21 @@ class Ros1Sink:
         self.writer.flush()
 
     def close(self) -> None:
+        writer = self.writer
         try:
-            self.writer.close()
+            writer.close()
         except WriteFailed as err:
             raise RostoolError(
-                f"{self.active}: cannot finish the bag ({err}); recover it with "
-                f"`rostool bag reindex {self.active}`"
+                f"{self.active}: cannot finish the bag ({err}); everything written is in it: free some "
+                f"space, then run `rostool bag reindex {self.active}`"
             ) from err
         os.replace(self.active, self.final)
+        failed = writer.failed
+        if failed is not None:
+            raise RostoolError(
+                f"{self.final}: {failed.strerror or failed}: the bag holds the {writer.kept} of "
+                f"{writer.messages} messages that reached the disk"
+            )
 
 
 class Ros2Sink:
@@ -325,11 +332,14 @@ class Ros2Sink:
             storage.conn.commit()
 
     def close(self) -> None:
+        from rosbags.rosbag2 import WriterError
+
         try:
             self.writer.close()
-        except OSError as err:
+        except (OSError, sqlite3.Error, WriterError) as err:  # e.g. disk full
+            reason = err.strerror if isinstance(err, OSError) and err.strerror else str(err)
             raise RostoolError(
-                f"{self.active}: cannot finish the bag: {err.strerror or err}; what was written is in "
+                f"{self.active}: cannot finish the bag: {reason}; what was written is in "
                 f"{self.active}: free some space, then run `rostool bag reindex {self.active}`"
             ) from err
         import yaml
@@ -646,6 +656,13 @@ class Recorder:
             sink.close()
         except RostoolError as err:
             self._failure = str(err)
+            return
+        except (OSError, sqlite3.Error) as err:  # e.g. metadata.yaml of a rosbag2 directory
+            reason = err.strerror if isinstance(err, OSError) and err.strerror else str(err)
+            self._failure = (
+                f"{sink.active}: cannot finish the bag: {reason}; free some space, then run "
+                f"`rostool bag reindex {sink.active}`"
+            )
             return
         finally:
             self.result.skipped.update(sink.problems)

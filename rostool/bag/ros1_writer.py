@@ -110,6 +110,11 @@ class BagWriter:
     def failed(self) -> OSError | None:
         return self._failed
 
+    @property
+    def kept(self) -> int:
+        """Messages the closed file indexes (fewer than `messages` only after a write failure)."""
+        return sum(sum(info.counts.values()) for info in self._infos)
+
     # -- writing ---------------------------------------------------------------------------------
     def connection(self, header: Mapping[str, str]) -> int:
         """The id of the connection with this header (topic, type, md5sum, message_definition, ...)."""
@@ -269,8 +274,9 @@ class BagWriter:
     def _recover(self) -> None:
         """After a failed write: keep the complete records on disk, cut the rest, index what is left.
 
-        First try keeping the complete messages of the chunk being written; if there is no room for its
-        index, drop that chunk and index the earlier ones (which frees the chunk's space)."""
+        Complete messages on disk are never cut to make room for an index: when the index of the chunk
+        being written does not fit, the file is left without index (complete records only) and
+        WriteFailed says so; `rostool bag reindex` rebuilds the index once there is room."""
         self._buf.clear()
         chunk, self._chunk = self._chunk, None
         if chunk is not None and self.compression == "none" and chunk.data_pos <= self._disk:
@@ -280,9 +286,9 @@ class BagWriter:
                 try:
                     self._keep_records(chunk, kept)
                     return
-                except OSError:
-                    if self._infos and self._infos[-1].pos == chunk.pos:
-                        self._infos.pop()
+                except OSError as err:
+                    self._cut(chunk.data_pos + kept[-1][1])
+                    raise WriteFailed(f"no room for the index: {err.strerror or err}") from err
         self._cut(min(chunk.pos, self._disk) if chunk is not None else self._disk)
         self._write_index()
 
