@@ -28,6 +28,7 @@ from rosbags.typesys.store import Typestore
 from rostool.bag.crossver import CrossVersionStores
 from rostool.bag.open import BagInput, describe, detect
 from rostool.bag.reader import BagReader
+from rostool.bag.replace import check_replaceable, swap_into_place
 from rostool.bag.typestores import DEFAULT_DISTRO
 from rostool.errors import RostoolError
 
@@ -153,6 +154,7 @@ def _check_destination(path: Path, inputs: Sequence[BagInput], force: bool) -> N
             raise RostoolError(f"{path}: the output is also an input; choose another name")
     if (path.exists() or path.is_symlink()) and not force:
         raise RostoolError(f"{path} exists; pass --force to overwrite it")
+    check_replaceable(path, [p for bag in inputs for p in (bag.path, *bag.files)])
     if not path.parent.exists():
         raise RostoolError(f"{path.parent}: no such directory")
 
@@ -173,11 +175,8 @@ def _atomic(output: Output, force: bool) -> Iterator[Path]:
         if output.path.exists() or output.path.is_symlink():
             if not force:
                 raise RostoolError(f"{output.path} appeared while converting; pass --force to overwrite it")
-            if output.path.is_dir() and not output.path.is_symlink():
-                shutil.rmtree(output.path)
-            else:
-                output.path.unlink()
-        os.replace(produced, output.path)
+            check_replaceable(output.path)
+        swap_into_place(produced, output.path)
     finally:
         shutil.rmtree(work, ignore_errors=True)
 

@@ -31,6 +31,7 @@ from types import FrameType
 from typing import Any, Literal, Protocol
 
 from rostool.bag.crossver import CrossVersionStores
+from rostool.bag.replace import check_replaceable, remove_bag, swap_into_place
 from rostool.bag.ros1_writer import BagWriter, WriteFailed
 from rostool.bag.rosbag2_dir import Rosbag2DirSink, Rosbag2Layout
 from rostool.errors import RostoolError
@@ -137,6 +138,7 @@ def _check_target(path: Path, force: bool) -> None:
     for candidate in (path, active_name(path)):
         if (candidate.exists() or candidate.is_symlink()) and not force:
             raise RostoolError(f"{candidate} exists; pass --force to overwrite it")
+        check_replaceable(candidate)
 
 
 # -- sinks ---------------------------------------------------------------------------------------
@@ -166,9 +168,8 @@ class Ros1Sink:
     def __init__(self, final: Path, compression: str, force: bool, source: RecordSource) -> None:
         self.final = final
         self.active = active_name(final)
-        if force:
-            with contextlib.suppress(FileNotFoundError, IsADirectoryError):
-                self.active.unlink()
+        if force:  # _check_target made sure it is a bag
+            remove_bag(self.active)
         try:
             self.writer = BagWriter(self.active, compression)
         except OSError as err:
@@ -220,7 +221,7 @@ class Ros1Sink:
                 f"{self.active}: cannot finish the bag ({err}); everything written is in it: free some "
                 f"space, then run `rostool bag reindex {self.active}`"
             ) from err
-        os.replace(self.active, self.final)
+        swap_into_place(self.active, self.final)
         failed = writer.failed
         if failed is not None:
             raise RostoolError(
@@ -249,8 +250,8 @@ class Ros2Sink:
         self.fmt = fmt
         self.source = source
         self._stores = CrossVersionStores(2)
-        if force and self.active.is_dir():
-            shutil.rmtree(self.active)
+        if force:  # _check_target made sure it is a bag
+            remove_bag(self.active)
         plugin = StoragePlugin.MCAP if fmt == "mcap" else StoragePlugin.SQLITE3
         try:
             self.writer: Any = Writer2(self.active, version=9, storage_plugin=plugin)
@@ -353,7 +354,7 @@ class Ros2Sink:
             self.final = self.final.with_name(
                 self.final.name + produced.name[len(self.active.name) + len(self.fmt) + 1 :]
             )
-        os.replace(produced, self.final)
+        swap_into_place(produced, self.final)
         shutil.rmtree(self.active, ignore_errors=True)
 
 

@@ -13,12 +13,12 @@ from __future__ import annotations
 
 import contextlib
 import os
-import shutil
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal
 
+from rostool.bag.replace import check_replaceable, remove_bag
 from rostool.errors import RostoolError
 
 if TYPE_CHECKING:
@@ -61,8 +61,9 @@ class Rosbag2DirSink:
         self.active = layout.path
         self.source = source
         self.problems: dict[str, str] = {}
-        if force and layout.path.is_dir():
-            shutil.rmtree(layout.path)
+        if force:  # only a bag: never a folder of the user's other files
+            check_replaceable(layout.path)
+            remove_bag(layout.path)
         check_output(layout.path)
         try:
             layout.path.mkdir()
