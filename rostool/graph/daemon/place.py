@@ -109,14 +109,14 @@ def daemon_place(backend: str, env: Mapping[str, str] = os.environ, create: bool
 
 
 def build_id(env: Mapping[str, str] = os.environ) -> str:
-    """rostool's version and the newest modification time of its sources: a changed checkout (an editable
-    install) is another build, and its daemon is replaced."""
+    """rostool's version and the newest modification time of its graph sources (what the daemon runs): a
+    changed checkout (an editable install) is another build, and its daemon is replaced."""
     from rostool import __version__
 
     claimed = env.get(BUILD_ENV, "").strip()
     if claimed:
         return claimed
-    root = Path(__file__).resolve().parents[2]
+    root = Path(__file__).resolve().parents[1]
     newest = 0
     for folder, _dirs, files in os.walk(root):
         for file in files:

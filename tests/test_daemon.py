@@ -1,0 +1,244 @@
+"""The ROS 2 graph daemon against real rclpy peers: listings through it equal direct listings, joins and
+leaves show, a killed daemon or a stale socket is replaced, a daemon of another build is replaced, two
+domains never mix, --no-daemon starts none, a socket directory that is not private is refused. Every
+test has its own runtime directory (so xdist workers never share a daemon) and stops every daemon it
+started."""
+
+from __future__ import annotations
+
+import contextlib
+import fcntl
+import json
+import os
+import shutil
+import signal
+import socket
+import subprocess
+import tempfile
+from collections.abc import Callable, Iterator
+from pathlib import Path
+
+import pytest
+
+from tests.ros2_backends import Tool
+from tests.ros2_peers import RclpyPeer
+from tests.support import ros2_env, rostool, wait_until
+
+ListFn = Callable[..., "subprocess.CompletedProcess[str]"]
+
+
+def _daemon_dirs(env: dict[str, str]) -> dict[str, str]:
+    # a short path: a Unix socket's path is limited to 107 bytes
+    run = tempfile.mkdtemp(prefix="rtd")
+    return {"XDG_RUNTIME_DIR": run, "XDG_STATE_HOME": os.path.join(run, "state"), **env}
+
+
+def _held_locks(run: Path) -> list[int]:
+    """The pids of daemons still holding a lock in `run`."""
+    held = []
+    for lock in run.glob("rostool/*.lock"):
+        with open(lock, encoding="utf-8") as handle:
+            try:
+                fcntl.flock(handle, fcntl.LOCK_SH | fcntl.LOCK_NB)
+            except BlockingIOError:
+                text = handle.read().strip()
+                held.append(int(text) if text.isdigit() else -1)
+    return held
+
+
+@pytest.fixture
+def graph_env() -> Iterator[dict[str, str]]:
+    """The test's ROS 2 environment with the daemon allowed, in a runtime directory of its own; every
+    daemon started in it is stopped at the end (and one that would not stop is killed, failing the test)."""
+    env = _daemon_dirs({**ros2_env(), "ROSTOOL_NO_DAEMON": ""})
+    run = Path(env["XDG_RUNTIME_DIR"])
+    yield env
+    rostool(["daemon", "stop", "--all"], env)
+    left = [pid for pid in _held_locks(run) if pid > 0]
+    for pid in left:
+        with contextlib.suppress(ProcessLookupError):
+            os.kill(pid, signal.SIGKILL)
+    shutil.rmtree(run, ignore_errors=True)
+    assert not left, f"daemons still running after `daemon stop --all`: {left}"
+
+
+def status(env: dict[str, str]) -> dict[str, object]:
+    done = rostool(["daemon", "status", "--json"], env)
+    assert done.returncode == 0, done.stderr
+    return json.loads(done.stdout)  # type: ignore[no-any-return]
+
+
+def started(env: dict[str, str]) -> dict[str, object]:
+    done = rostool(["daemon", "start"], env, timeout=60)
+    assert done.returncode == 0 and done.stdout.strip() == "The daemon has been started", done
+    found = status(env)
+    assert found["running"] is True
+    return found
+
+
+def names(done: subprocess.CompletedProcess[str]) -> list[str]:
+    assert done.returncode == 0, done.stderr
+    return done.stdout.split()
+
+
+LISTINGS = [
+    ["topic", "list", "-t"],
+    ["node", "list"],
+    ["service", "list", "-t"],
+    ["action", "list", "-t"],
+    ["topic", "info", "/chatter", "-v"],
+    ["topic", "type", "/chatter"],
+    ["node", "info", "/talker"],
+    ["service", "type", "/toggle"],
+    ["service", "find", "std_srvs/srv/SetBool"],
+    ["action", "info", "/fib"],
+    ["node", "list", "--json"],
+]
+
+
+def test_listings_through_the_daemon_equal_direct_ones(
+    tool: Tool, start_peer: Callable[..., RclpyPeer], graph_env: dict[str, str], backend: str
+) -> None:
+    start_peer("--name", "talker", "--talk", "/chatter", "--service", "/toggle")
+    start_peer("--name", "fibber", "--action", "/fib", "--listen", "/chatter")
+    started_ = tool(["daemon", "start"], timeout=60)
+    assert started_.stdout.strip() == "The daemon has been started", started_.stderr
+    running = json.loads(tool(["daemon", "status", "--json"]).stdout)
+    assert running["running"] is True and running["backend"] == backend
+    assert running["domain"] == int(graph_env["ROS_DOMAIN_ID"])
+    for args in LISTINGS:
+        direct = tool([*args, "--no-daemon"])
+        assert direct.returncode == 0, (args, direct.stderr)
+        served = tool(args)
+        assert (served.returncode, served.stdout) == (0, direct.stdout), args
+        assert served.stderr_lines == [], (args, served.stderr)  # type: ignore[attr-defined]
+    assert "/talker" in tool(["node", "list"]).stdout.split()
+    assert json.loads(tool(["daemon", "status", "--json"]).stdout)["running"] is True
+
+
+def test_joins_and_clean_leaves_show_at_once(
+    tool: Tool, start_peer: Callable[..., RclpyPeer], graph_env: dict[str, str]
+) -> None:
+    start_peer("--name", "first")
+    assert tool(["daemon", "start"], timeout=60).returncode == 0
+    assert tool(["node", "list"]).stdout.split() == ["/first"]
+    late = start_peer("--name", "late", "--talk", "/late_topic")
+    assert wait_until(lambda: "/late" in tool(["node", "list"]).stdout.split(), timeout=20)
+    assert "/late_topic" in tool(["topic", "list"]).stdout.split()
+    late.stop()
+    assert wait_until(lambda: tool(["node", "list"]).stdout.split() == ["/first"], timeout=20)
+    assert "/late_topic" not in tool(["topic", "list"]).stdout.split()
+
+
+@pytest.mark.parametrize("distro", ["jazzy"])
+def test_a_killed_daemon_is_replaced_and_the_query_still_answers(
+    start_peer: Callable[..., RclpyPeer], graph_env: dict[str, str]
+) -> None:
+    start_peer("--name", "survivor")
+    first = started(graph_env)
+    os.kill(int(str(first["pid"])), signal.SIGKILL)
+    assert wait_until(lambda: not status(graph_env)["running"])
+    assert Path(str(first["socket"])).exists()  # the dead daemon's stale socket
+    listed = rostool(["node", "list"], graph_env)
+    assert names(listed) == ["/survivor"] and listed.stderr == ""
+    assert wait_until(lambda: status(graph_env)["running"] is True, timeout=20)
+    second = status(graph_env)
+    assert second["pid"] != first["pid"]
+    assert names(rostool(["node", "list"], graph_env)) == ["/survivor"]
+
+
+@pytest.mark.parametrize("distro", ["jazzy"])
+def test_a_stale_socket_file_is_replaced(
+    start_peer: Callable[..., RclpyPeer], graph_env: dict[str, str]
+) -> None:
+    start_peer("--name", "stale_check")
+    path = Path(str(status(graph_env)["socket"]))
+    path.parent.mkdir(mode=0o700, parents=True, exist_ok=True)
+    orphan = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+    orphan.bind(str(path))  # bound, never listening, closed: what a killed process leaves
+    orphan.close()
+    os.chmod(path, 0o600)
+    assert names(rostool(["node", "list"], graph_env)) == ["/stale_check"]
+    assert wait_until(lambda: status(graph_env)["running"] is True, timeout=20)
+    assert names(rostool(["node", "list"], graph_env)) == ["/stale_check"]
+
+
+@pytest.mark.parametrize("distro", ["jazzy"])
+def test_a_daemon_of_another_build_is_replaced(
+    start_peer: Callable[..., RclpyPeer], graph_env: dict[str, str]
+) -> None:
+    start_peer("--name", "versioned")
+    old = started({**graph_env, "ROSTOOL_DAEMON_BUILD": "0.0.1-old"})
+    assert old["build"] == "0.0.1-old"
+    assert names(rostool(["node", "list"], graph_env)) == ["/versioned"]
+    assert wait_until(lambda: status(graph_env).get("pid") not in (None, old["pid"]), timeout=20)
+    new = status(graph_env)
+    assert new["build"] != "0.0.1-old"
+    assert names(rostool(["node", "list"], graph_env)) == ["/versioned"]
+
+
+@pytest.mark.parametrize("distro", ["jazzy"])
+def test_two_domains_side_by_side_never_mix(
+    start_peer: Callable[..., RclpyPeer], graph_env: dict[str, str], tmp_path: Path
+) -> None:
+    start_peer("--name", "in_first")
+    other = {
+        **{**ros2_env(), "ROSTOOL_NO_DAEMON": ""},
+        **{k: graph_env[k] for k in ("XDG_RUNTIME_DIR", "XDG_STATE_HOME")},
+    }
+    second_peer = RclpyPeer("jazzy", other, tmp_path, ["--name", "in_second"])
+    try:
+        second_peer.wait_for("ready", timeout=30)
+        first, second = started(graph_env), started(other)
+        assert first["pid"] != second["pid"] and first["socket"] != second["socket"]
+        assert (first["domain"], second["domain"]) == (
+            int(graph_env["ROS_DOMAIN_ID"]),
+            int(other["ROS_DOMAIN_ID"]),
+        )
+        for _ in range(3):
+            assert names(rostool(["node", "list"], graph_env)) == ["/in_first"]
+            assert names(rostool(["node", "list"], other)) == ["/in_second"]
+    finally:
+        second_peer.stop()
+
+
+@pytest.mark.parametrize("distro", ["jazzy"])
+def test_no_daemon_starts_none(start_peer: Callable[..., RclpyPeer], graph_env: dict[str, str]) -> None:
+    start_peer("--name", "alone")
+    assert names(rostool(["node", "list", "--no-daemon"], graph_env)) == ["/alone"]
+    assert names(rostool(["topic", "list", "--no-daemon"], graph_env)) == ["/parameter_events", "/rosout"]
+    assert names(rostool(["node", "list"], {**graph_env, "ROSTOOL_NO_DAEMON": "1"})) == ["/alone"]
+    assert not list(Path(graph_env["XDG_RUNTIME_DIR"]).glob("rostool/*.sock"))
+    assert status(graph_env)["running"] is False
+
+
+def test_an_empty_graph_lists_nothing_and_succeeds(graph_env: dict[str, str]) -> None:
+    started(graph_env)
+    for args in (["topic", "list"], ["node", "list"], ["service", "list"], ["action", "list"]):
+        done = rostool(args, graph_env)
+        assert (done.returncode, done.stdout, done.stderr) == (0, "", ""), args
+    assert status(graph_env)["graph"] == {"nodes": 0, "topics": 0, "services": 0, "actions": 0}
+
+
+@pytest.mark.parametrize("distro", ["jazzy"])
+@pytest.mark.parametrize("wrong", ["mode", "owner"])
+def test_a_socket_directory_that_is_not_private_is_refused(
+    start_peer: Callable[..., RclpyPeer], graph_env: dict[str, str], wrong: str
+) -> None:
+    start_peer("--name", "refused")
+    folder = Path(graph_env["XDG_RUNTIME_DIR"]) / "rostool"
+    folder.mkdir(mode=0o700)
+    if wrong == "mode":
+        folder.chmod(0o755)
+        expected = "chmod 700"
+    else:
+        if os.getuid() != 0:
+            pytest.skip("giving a directory to another user needs root")
+        os.chown(folder, 65534, 65534)
+        expected = "belongs to uid 65534"
+    start = rostool(["daemon", "start"], graph_env)
+    assert start.returncode == 1 and len(start.stderr.splitlines()) == 1 and expected in start.stderr
+    listed = rostool(["node", "list"], graph_env)
+    assert names(listed) == ["/refused"]  # still answered, directly
+    assert len(listed.stderr.splitlines()) == 1 and expected in listed.stderr
+    assert not list(folder.iterdir())
