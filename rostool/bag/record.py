@@ -266,6 +266,7 @@ class Ros2Sink:
         except Exception as err:  # rosbags' WriterError
             raise RostoolError(f"{self.active}: cannot create the bag: {err}") from err
         self._conns: dict[object, tuple[Any, Callable[[bytes], Any]] | None] = {}
+        self._shared: dict[tuple[str | None, str | None, str | None, bool], tuple[Any, Any]] = {}
         self.problems: dict[str, str] = {}
         self._bytes = 0
         self._chunk_started = time.monotonic()
@@ -293,6 +294,17 @@ class Ros2Sink:
         return True
 
     def _add(self, header: Mapping[str, str]) -> tuple[Any, Callable[[bytes], Any]] | None:
+        # Several publishers of one topic (/tf, /rosout) share its one connection: rosbags takes a
+        # (topic, type, QoS) once.
+        same = (header.get("topic"), header.get("type"), header.get("md5sum"), header.get("latching") == "1")
+        if same in self._shared:
+            return self._shared[same]
+        entry = self._add_connection(header)
+        if entry is not None:
+            self._shared[same] = entry
+        return entry
+
+    def _add_connection(self, header: Mapping[str, str]) -> tuple[Any, Callable[[bytes], Any]] | None:
         from functools import partial
 
         from rosbags.convert.converter import LATCH, STATIC_MSGTYPE_RENAMES
