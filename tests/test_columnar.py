@@ -138,6 +138,13 @@ def _fixed_layout_messages(store: object) -> list[tuple[str, str, list[object]]]
 
 @pytest.mark.parametrize("fmt", ["mcap", "sqlite3", "bag"])
 def test_fixed_layout_types_decode_columnar_with_changing_lengths(tmp_path: Path, fmt: str) -> None:
+    path = _write_fixed_bag(tmp_path, fmt)
+    counts = _both_ways(path, batch=1024)
+    for topic, (columnar, fallback) in counts.items():
+        assert columnar >= 0.9 * (columnar + fallback), f"{topic}: {columnar} columnar, {fallback} not"
+
+
+def _write_fixed_bag(tmp_path: Path, fmt: str) -> Path:
     if fmt == "bag":
         store = get_typestore(Stores.ROS1_NOETIC)
         path = tmp_path / "fixed.bag"
@@ -146,15 +153,41 @@ def test_fixed_layout_types_decode_columnar_with_changing_lengths(tmp_path: Path
                 conn = writer.add_connection(topic, msgtype, typestore=store)
                 for i, msg in enumerate(messages):
                     writer.write(conn, 1_000 + i, store.serialize_ros1(msg, msgtype))
-    else:
-        store = get_typestore(Stores.ROS2_JAZZY)
-        path = tmp_path / "fixed"
-        plugin = StoragePlugin.MCAP if fmt == "mcap" else StoragePlugin.SQLITE3
-        with Ros2Writer(path, version=9, storage_plugin=plugin) as writer:
-            for topic, msgtype, messages in _fixed_layout_messages(store):
-                conn = writer.add_connection(topic, msgtype, typestore=store)
-                for i, msg in enumerate(messages):
-                    writer.write(conn, 1_000 + i, store.serialize_cdr(msg, msgtype))
-    counts = _both_ways(path, batch=1024)
-    for topic, (columnar, fallback) in counts.items():
-        assert columnar >= 0.9 * (columnar + fallback), f"{topic}: {columnar} columnar, {fallback} not"
+        return path
+    store = get_typestore(Stores.ROS2_JAZZY)
+    path = tmp_path / "fixed"
+    plugin = StoragePlugin.MCAP if fmt == "mcap" else StoragePlugin.SQLITE3
+    with Ros2Writer(path, version=9, storage_plugin=plugin) as writer:
+        for topic, msgtype, messages in _fixed_layout_messages(store):
+            conn = writer.add_connection(topic, msgtype, typestore=store)
+            for i, msg in enumerate(messages):
+                writer.write(conn, 1_000 + i, store.serialize_cdr(msg, msgtype))
+    return path
+
+
+@pytest.mark.parametrize("fmt", ["mcap", "sqlite3", "bag"])
+def test_export_tables_equal_rosbags_decoding_message_by_message(tmp_path: Path, fmt: str) -> None:
+    """The Parquet tables (columnar; for .mcap read chunk by chunk) hold what rosbags decodes, row by row."""
+    import pyarrow.parquet as pq
+
+    from rostool.bag.export import ExportOptions, export_bag
+    from rostool.bag.mcap_batches import plan
+
+    path = _write_fixed_bag(tmp_path, fmt)
+    if fmt == "mcap":  # the chunk reader serves this bag
+        files = sorted(path.glob("*.mcap"))
+        assert plan(files, {("/imu", "sensor_msgs/msg/Imu"): 1}) is not None
+    out = tmp_path / "out"
+    export_bag(path, ExportOptions(fmt="parquet", out=out, batch_rows=500))
+    with BagReader([path]) as reader:
+        style = "ros1" if reader.ros_version == 1 else "ros2"
+        for conn in reader.select([]):
+            rows = [(t, reader.deserialize(d, conn)) for _c, t, d in reader.messages([conn])]
+            plan_ = TypePlan(reader.resolver.store.fielddefs, style, reader.ros_version)
+            columns = plan_.columns(conn.msgtype)
+            expected = [[t for t, _ in rows], *columns_from_messages(columns[1:], [m for _, m in rows])]
+            table = pq.read_table(out / f"{conn.topic.strip('/')}.parquet")
+            assert table.column_names == [c.name for c in columns]
+            for column, values in zip(columns, expected, strict=True):
+                want = pa.array(values, type=arrow_type(column.spec))
+                assert table.column(column.name).combine_chunks().equals(want), f"{conn.topic} {column.name}"

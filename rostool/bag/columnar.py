@@ -198,8 +198,8 @@ def probe(plan: TypePlan, msgtype: str, data: bytes, cdr: bool) -> Layout:
         raise NotColumnar  # big-endian CDR: rare, left to rosbags
     walker = _Walker(plan, data, cdr)
     walker.message(msgtype, ())
-    if walker.pos > len(data):
-        raise NotColumnar
+    if not 0 <= len(data) - walker.pos <= (3 if cdr else 0):
+        raise NotColumnar  # trailing bytes: left to rosbags to judge
     return Layout(len(data), walker.fields, walker.lengths, walker.terminators)
 
 
@@ -228,7 +228,7 @@ class ColumnarDecoder:
         self.fallback_rows = 0
         self._layouts: dict[int, list[Layout]] = {}  # by message size: layouts seen before
 
-    def decode(self, datas: Sequence[bytes]) -> list[Any]:
+    def decode(self, datas: Sequence[bytes | memoryview]) -> list[Any]:
         """One pyarrow array per column, rows in the order of `datas`."""
         pa = self._pa
         sizes = np.fromiter(map(len, datas), dtype=np.int64, count=len(datas))
@@ -268,26 +268,40 @@ class ColumnarDecoder:
             merged.append(joined.take(pa.array(order)))
         return merged
 
-    def _uniform(self, datas: Sequence[bytes]) -> list[Any] | None:
+    def decode_slices(self, buffer: bytes, starts: np.ndarray, sizes: np.ndarray) -> list[Any]:
+        """As `decode`, for messages given as slices of one buffer (a chunk's): gathered straight into the
+        row-per-message array when they share one size."""
+        if len(starts) and sizes.min() == sizes.max():
+            size = int(sizes[0])
+            whole = np.frombuffer(buffer, dtype=np.uint8)
+            matrix = whole[starts[:, None] + np.arange(size)]
+            first = buffer[int(starts[0]) : int(starts[0]) + size]
+            arrays = self._uniform_rows(matrix, first)
+            if arrays is not None:
+                return arrays
+        return self.decode([buffer[int(s) : int(s) + int(n)] for s, n in zip(starts, sizes, strict=True)])
+
+    def _uniform(self, datas: Sequence[bytes | memoryview]) -> list[Any] | None:
         """The batch's columns when every message has the first one's layout; None otherwise."""
-        layout = self._layout(datas[0])
-        if layout is None:
-            return None
         buffer = np.frombuffer(b"".join(datas), dtype=np.uint8).reshape(len(datas), -1)
-        if not _fits(buffer, layout).all():
+        return self._uniform_rows(buffer, bytes(datas[0]))
+
+    def _uniform_rows(self, buffer: np.ndarray, first: bytes) -> list[Any] | None:
+        layout = self._layout(first)
+        if layout is None or not _fits(buffer, layout).all():
             return None
         arrays = self._arrays(buffer, layout)
         if arrays is not None:
-            self.columnar_rows += len(datas)
+            self.columnar_rows += len(buffer)
         return arrays
 
-    def _layout(self, data: bytes) -> Layout | None:
+    def _layout(self, data: bytes | memoryview) -> Layout | None:
         known = self._layouts.setdefault(len(data), [])
         for layout in known:
             if all(int.from_bytes(data[o : o + 4], "little") == v for o, v in layout.lengths):
                 return layout
         try:
-            layout = probe(self.plan, self.msgtype, data, self.cdr)
+            layout = probe(self.plan, self.msgtype, bytes(data), self.cdr)
         except (NotColumnar, IndexError):
             return None
         if len(known) < MAX_PROBES:

@@ -13,10 +13,10 @@ from __future__ import annotations
 import csv
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from operator import attrgetter
 from pathlib import Path
 from typing import Any, Literal
 
+from rostool.bag.columnar import columns_from_messages
 from rostool.bag.export_columns import Column, TypePlan, arrow_type, is_scalar
 from rostool.bag.open import warn
 from rostool.bag.typestores import DEFAULT_DISTRO
@@ -98,26 +98,31 @@ def export_bag(
         images: dict[str, Any] = {}
         skipped: set[str] = set()
         bar = _Bar(sum(conn.msgcount for conn in conns), str(path)) if progress else None
+        raw_tables = options.fmt == "parquet"  # decoded column-wise in batches (columnar.py)
         try:
-            for conn, timestamp, data in reader.messages(conns) if conns else ():
-                msg = reader.deserialize(data, conn)
+            chunked = _chunk_plan(reader, conns, options)
+            if chunked is not None:
+                _export_chunks(reader, chunked, tables, options, style, partition, result, bar)
+            for conn, timestamp, data in reader.messages(conns) if conns and chunked is None else ():
                 result.messages += 1
                 if bar is not None and not result.messages % 1024:
                     bar.update(result.messages)
                 result.bytes += len(data)
                 topic = conn.topic
-                if conn.msgtype in IMAGE_TYPES and options.images is not None:
+                table = tables.get(topic)
+                wants_image = conn.msgtype in IMAGE_TYPES and options.images is not None
+                msg = None
+                if wants_image or table is None or not raw_tables:
+                    msg = reader.deserialize(data, conn)  # the first one also settles the type's definition
+                if wants_image:
                     sink = images.get(topic)
                     if sink is None:
                         sink = images[topic] = _image_sink(options, topic, partition)
                     result.images += sink.add(msg, timestamp)
                 if options.fmt is None or options.out is None:
                     continue
-                table = tables.get(topic)
                 if table is None:
-                    plan = TypePlan(reader.resolver.store.fielddefs, style, reader.ros_version)
-                    where = table_path(options.out, topic, options.fmt, partition)
-                    table = tables[topic] = _Table(conn.msgtype, plan.columns(conn.msgtype), where, options)
+                    table = tables[topic] = _new_table(reader, conn, options, style, partition)
                 elif conn.msgtype != table.msgtype:
                     if topic not in skipped:
                         skipped.add(topic)
@@ -125,7 +130,10 @@ def export_bag(
                             f"{topic}: left out its {conn.msgtype} messages (the table holds {table.msgtype})"
                         )
                     continue
-                table.add(msg, timestamp, len(data))
+                if table.decoder is not None:
+                    table.add_raw(data, timestamp)
+                else:
+                    table.add(msg, timestamp, len(data))
             if options.fmt is not None and options.out is not None:
                 _empty_tables(reader, conns, tables, options, style, partition)
             for table in tables.values():
@@ -143,6 +151,67 @@ def export_bag(
                 sink.discard()
             raise
     return result
+
+
+def _new_table(reader: Any, conn: Any, options: ExportOptions, style: Any, partition: str | None) -> _Table:
+    """A topic's table; Parquet tables decode raw messages column-wise (ColumnarDecoder)."""
+    assert options.fmt is not None and options.out is not None
+    plan = TypePlan(reader.resolver.store.fielddefs, style, reader.ros_version)
+    columns = plan.columns(conn.msgtype)
+    decoder = None
+    if options.fmt == "parquet":
+        from rostool.bag.columnar import ColumnarDecoder
+
+        def deserialize(data: bytes, conn: Any = conn) -> object:
+            return reader.deserialize(data, conn)
+
+        decoder = ColumnarDecoder(plan, conn.msgtype, columns[1:], reader.ros_version == 2, deserialize)
+    where = table_path(options.out, conn.topic, options.fmt, partition)
+    return _Table(conn.msgtype, columns, where, options, decoder)
+
+
+def _chunk_plan(reader: Any, conns: Sequence[Any], options: ExportOptions) -> Any:
+    """Where the .mcap chunks of a one-bag Parquet export can be read directly (mcap_batches.py): an
+    indexed .mcap (or rosbag2 directory of them, not compressed per message) without images to write."""
+    if options.fmt != "parquet" or options.out is None or options.images is not None or not conns:
+        return None
+    if len(reader.inputs) != 1 or reader.inputs[0].storage != "mcap":
+        return None
+    bag = reader.inputs[0]
+    if reader.message_compressed:
+        return None
+    from rostool.bag.mcap_batches import plan
+
+    return plan(list(bag.files), {(conn.topic, conn.msgtype): conn for conn in conns})
+
+
+def _export_chunks(
+    reader: Any,
+    chunked: Any,
+    tables: dict[str, _Table],
+    options: ExportOptions,
+    style: Any,
+    partition: str | None,
+    result: ExportResult,
+    bar: _Bar | None,
+) -> None:
+    """Each chunk's messages, channel by channel, straight into their tables."""
+    from rostool.bag.mcap_batches import batches
+
+    for conn, batch in batches(chunked):
+        table = tables.get(conn.topic)
+        if table is None:
+            first = batch.buffer[batch.starts[0] : batch.starts[0] + batch.sizes[0]]
+            reader.deserialize(first, conn)  # settles the type's definition, as the first message does
+            table = tables[conn.topic] = _new_table(reader, conn, options, style, partition)
+        elif conn.msgtype != table.msgtype:
+            warn(f"{conn.topic}: left out its {conn.msgtype} messages (the table holds {table.msgtype})")
+            continue
+        table.add_batch(batch)
+        result.messages += len(batch.starts)
+        result.bytes += int(batch.sizes.sum())
+        if bar is not None:
+            bar.update(result.messages)
 
 
 def _empty_tables(
@@ -175,9 +244,13 @@ def _image_sink(options: ExportOptions, topic: str, partition: str | None) -> An
 class _Table:
     """One topic's rows, buffered by column and written in batches."""
 
-    def __init__(self, msgtype: str, columns: list[Column], path: Path, options: ExportOptions) -> None:
+    def __init__(
+        self, msgtype: str, columns: list[Column], path: Path, options: ExportOptions, decoder: Any = None
+    ) -> None:
         self.msgtype = msgtype
         self.columns = columns
+        self.decoder = decoder  # a ColumnarDecoder: rows come as raw bytes (add_raw, add_batch)
+        self._raws: list[bytes | memoryview] = []
         self.path = path
         self.partial = path.with_name(path.name + ".partial")
         self.batch_rows = options.batch_rows
@@ -196,24 +269,31 @@ class _Table:
         if len(self._times) >= self.batch_rows or self._bytes >= self.batch_bytes:
             self.flush()
 
+    def add_raw(self, data: bytes | memoryview, timestamp: int) -> None:
+        self._times.append(timestamp)
+        self._raws.append(data)
+        self._bytes += len(data)
+        if len(self._times) >= self.batch_rows or self._bytes >= self.batch_bytes:
+            self.flush()
+
+    def add_batch(self, batch: Any) -> None:
+        """A chunk's messages of this topic (mcap_batches.ChannelBatch), written as they come."""
+        self.flush()
+        assert self.decoder is not None and isinstance(self.sink, _ParquetSink)
+        for start in range(0, len(batch.starts), self.batch_rows):
+            part = slice(start, start + self.batch_rows)
+            arrays = self.decoder.decode_slices(batch.buffer, batch.starts[part], batch.sizes[part])
+            self.sink.write_arrays(batch.log_times[part], arrays)
+
     def flush(self) -> None:
-        """Columns are taken from a batch of buffered messages, each attribute once per message: columns
-        under one parent (`pose.position.x`, `.y`, `.z`) share the parent's list."""
-        if self._times:
-            lists: dict[tuple[str, ...], list[Any]] = {(): self._messages}
-
-            def values(path: tuple[str, ...]) -> list[Any]:
-                found = lists.get(path)
-                if found is None:
-                    found = lists[path] = list(map(attrgetter(path[-1]), values(path[:-1])))
-                return found
-
-            columns: list[list[Any]] = [self._times]
-            for column in self.columns[1:]:
-                got = values(column.path)
-                columns.append(got if column.convert is None else list(map(column.convert, got)))
-            self.sink.write(columns)
-        self._times, self._messages, self._bytes = [], [], 0
+        """Raw rows are decoded column-wise; decoded messages give their columns through each attribute once
+        per message (columns_from_messages)."""
+        if self._raws:
+            assert self.decoder is not None and isinstance(self.sink, _ParquetSink)
+            self.sink.write_arrays(self._times, self.decoder.decode(self._raws))
+        elif self._times:
+            self.sink.write([self._times, *columns_from_messages(self.columns[1:], self._messages)])
+        self._times, self._messages, self._raws, self._bytes = [], [], [], 0
 
     def close(self) -> Path:
         self.flush()
@@ -242,6 +322,11 @@ class _ParquetSink:
         pa = self._pa
         arrays = [pa.array(column, type=f.type) for column, f in zip(values, self.schema, strict=True)]
         self.writer.write_batch(pa.RecordBatch.from_arrays(arrays, schema=self.schema))
+
+    def write_arrays(self, times: Any, arrays: list[Any]) -> None:
+        pa = self._pa
+        columns = [pa.array(times, type=pa.int64()), *arrays]
+        self.writer.write_batch(pa.RecordBatch.from_arrays(columns, schema=self.schema))
 
     def close(self) -> None:
         if not self._closed:

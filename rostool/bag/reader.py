@@ -70,6 +70,7 @@ class BagReader(AbstractContextManager["BagReader"]):
         self.connections: list[Connection] = []
         self.topics: dict[str, Topic] = {}
         self._origin: dict[int, Path] = {}  # id(our connection) -> the file it was first seen in
+        self.message_compressed = False  # a rosbag2 bag compressed message by message
         try:
             for bag in self.inputs:
                 self._open(bag)
@@ -100,6 +101,7 @@ class BagReader(AbstractContextManager["BagReader"]):
                 self._open_beside(bag, err)
                 return
             compressed = directory.metadata.compression_mode == "message"
+            self.message_compressed = self.message_compressed or compressed
             for storage, path in zip(directory.storages, bag.files, strict=False):
                 self._add_storage(path, storage, compressed, counts=False)
             # Counts (and topics that no storage has) come from metadata.yaml.

@@ -1,0 +1,174 @@
+"""An indexed .mcap read chunk by chunk into per-channel batches of raw messages, for columnar export.
+
+The mcap library (and rosbags' reader on top of it) makes a Python object per record, which caps reading at
+about 130,000 messages a second; export needs only each message's log time and the offset of its bytes. This
+reader decompresses a chunk (no more than the size its header declares), walks its records once, and hands
+out per channel the chunk buffer with the start, size and log time of each message: what the columnar decoder
+gathers from directly. It serves only what it can serve in the order a time-ordered read gives per channel:
+an indexed file whose chunks do not overlap in time (what rosbag2 and the mcap CLI write); anything else
+(`plan` returns None) is read the usual way.
+"""
+
+from __future__ import annotations
+
+import struct
+from collections.abc import Collection, Iterator, Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, BinaryIO
+
+import numpy as np
+
+from rostool.errors import RostoolError
+
+_MESSAGE = 0x05
+_CHUNK = 0x06
+_RECORD = struct.Struct("<BQ")
+_MESSAGE_HEAD = struct.Struct("<HIQQ")  # channel id, sequence, log time, publish time
+_CHUNK_HEAD = struct.Struct("<QQQI")  # start time, end time, uncompressed size, uncompressed crc
+
+
+@dataclass
+class ChannelBatch:
+    """Messages of one channel from one chunk, in log-time order: `buffer[starts[i]:starts[i] + sizes[i]]`."""
+
+    channel_id: int
+    buffer: bytes
+    starts: np.ndarray
+    sizes: np.ndarray
+    log_times: np.ndarray
+
+
+@dataclass(frozen=True)
+class ChunkPlan:
+    """The chunks to read, in file order (which is log-time order: they do not overlap), and the wanted
+    channels of each file, with the caller's object (a connection) for each."""
+
+    chunks: tuple[tuple[Path, int, int], ...]  # (file, offset, length) of each Chunk record
+    channels: dict[Path, dict[int, Any]]
+
+
+def plan(paths: Sequence[Path], wanted: Mapping[tuple[str, str], Any]) -> ChunkPlan | None:
+    """The chunks of `paths` holding the `wanted` (topic, message type) channels, or None when this reader
+    cannot give the per-channel time order (no summary or chunk index, chunks overlapping in time, an
+    unknown compression)."""
+    from mcap.exceptions import McapError
+    from mcap.reader import make_reader
+
+    chunks: list[tuple[Path, int, int]] = []
+    channels: dict[Path, dict[int, Any]] = {}
+    last_end = -1
+    for path in paths:
+        try:
+            with path.open("rb") as handle:
+                summary = make_reader(handle).get_summary()
+        except (McapError, OSError, ValueError, struct.error):
+            return None
+        if summary is None or not summary.chunk_indexes:
+            return None
+        channels[path] = {}
+        for channel in summary.channels.values():
+            schema = summary.schemas.get(channel.schema_id)
+            target = wanted.get((channel.topic, schema.name if schema else ""))
+            if target is not None:
+                channels[path][channel.id] = target
+        for index in sorted(summary.chunk_indexes, key=lambda index: index.chunk_start_offset):
+            if index.message_start_time < last_end or index.compression not in ("", "zstd", "lz4"):
+                return None
+            last_end = index.message_end_time
+            chunks.append((path, index.chunk_start_offset, index.chunk_length))
+    return ChunkPlan(tuple(chunks), channels)
+
+
+def batches(chunk_plan: ChunkPlan) -> Iterator[tuple[Any, ChannelBatch]]:
+    """The messages of the wanted channels, chunk by chunk, each channel's in log-time order."""
+    handles: dict[Path, BinaryIO] = {}
+    try:
+        for path, offset, length in chunk_plan.chunks:
+            handle = handles.get(path)
+            if handle is None:
+                handle = handles[path] = path.open("rb")
+            wanted = chunk_plan.channels[path]
+            records = _chunk_records(handle, offset, length, path)
+            for batch in _split(records, wanted.keys(), path):
+                yield wanted[batch.channel_id], batch
+    finally:
+        for handle in handles.values():
+            handle.close()
+
+
+def _chunk_records(handle: BinaryIO, offset: int, length: int, path: Path) -> bytes:
+    handle.seek(offset)
+    raw = handle.read(length)
+    if len(raw) != length or raw[0] != _CHUNK:
+        raise RostoolError(f"{path}: a chunk the index points to is not there; try `rostool bag reindex`")
+    _start, _end, uncompressed_size, _crc = _CHUNK_HEAD.unpack_from(raw, 9)
+    pos = 9 + _CHUNK_HEAD.size
+    (name_length,) = struct.unpack_from("<I", raw, pos)
+    compression = raw[pos + 4 : pos + 4 + name_length].decode("ascii", "replace")
+    pos += 4 + name_length
+    (records_length,) = struct.unpack_from("<Q", raw, pos)
+    records = raw[pos + 8 : pos + 8 + records_length]
+    try:
+        # bounded by the declared size: a chunk that declares little and inflates to gigabytes stops there
+        if compression == "zstd":
+            data = _bounded_zstd(records, uncompressed_size + 1)
+        elif compression == "lz4":
+            import lz4.frame
+
+            data = lz4.frame.LZ4FrameDecompressor().decompress(records, max_length=uncompressed_size + 1)
+        else:
+            data = records
+    except Exception as err:  # the compressors' own error types
+        raise RostoolError(f"{path}: a chunk does not decompress ({err}); try `rostool bag reindex`") from err
+    if len(data) != uncompressed_size:
+        raise RostoolError(
+            f"{path}: a chunk holds {len(data)} bytes where its header says {uncompressed_size};"
+            " try `rostool bag reindex`"
+        )
+    return bytes(data)
+
+
+def _bounded_zstd(records: bytes, limit: int) -> bytes:
+    import zstandard
+
+    parts: list[bytes] = []
+    got = 0
+    with zstandard.ZstdDecompressor().stream_reader(records) as reader:
+        while got < limit:
+            part = reader.read(limit - got)
+            if not part:
+                break
+            parts.append(part)
+            got += len(part)
+    return b"".join(parts)
+
+
+def _split(data: bytes, channels: Collection[int], path: Path) -> Iterator[ChannelBatch]:
+    """One walk over a chunk's records; the Message records of `channels` grouped by channel."""
+    found: dict[int, tuple[list[int], list[int], list[int]]] = {}
+    unpack_record, unpack_head = _RECORD.unpack_from, _MESSAGE_HEAD.unpack_from
+    pos, end = 0, len(data)
+    head = _RECORD.size + _MESSAGE_HEAD.size
+    while pos + _RECORD.size <= end:
+        opcode, length = unpack_record(data, pos)
+        if opcode == _MESSAGE and length >= _MESSAGE_HEAD.size:
+            channel, _seq, log_time, _pub = unpack_head(data, pos + _RECORD.size)
+            if channel in channels:
+                lists = found.get(channel)
+                if lists is None:
+                    lists = found[channel] = ([], [], [])
+                lists[0].append(pos + head)
+                lists[1].append(length - _MESSAGE_HEAD.size)
+                lists[2].append(log_time)
+        pos += _RECORD.size + length
+    if pos != end:
+        raise RostoolError(f"{path}: a chunk's last record runs past its end; try `rostool bag reindex`")
+    for channel, (starts, sizes, times) in found.items():
+        log_times = np.array(times, dtype=np.int64)
+        starts_array = np.array(starts, dtype=np.int64)
+        sizes_array = np.array(sizes, dtype=np.int64)
+        if len(log_times) > 1 and (np.diff(log_times) < 0).any():
+            order = np.argsort(log_times, kind="stable")
+            log_times, starts_array, sizes_array = log_times[order], starts_array[order], sizes_array[order]
+        yield ChannelBatch(channel, data, starts_array, sizes_array, log_times)
