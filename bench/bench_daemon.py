@@ -1,0 +1,164 @@
+"""Listings through rostool's graph daemon beside the real `ros2` with its own warm daemon, on one graph of
+real rclpy nodes (>= 10 nodes, >= 40 topics, services, actions; Fast DDS on loopback), in one run.
+
+    .venv/bin/python bench/bench_daemon.py [--runs 20] [--cold 5] [--backend dds|rclpy]...
+
+Each call is a new process, as a user's shell runs it; calls of the two tools alternate, so a drift of the
+machine's speed touches both. `complete` counts the runs whose answer held every name the graph has.
+Cold: no daemon yet (it is stopped before each run): the call answers directly while it starts one.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import shutil
+import statistics
+import subprocess
+import tempfile
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+from _graph import VENV_PYTHON, ros2_env
+
+from tests.ros2_peers import PEERS_DIR, RclpyPeer, assert_loopback_only, peer_env
+
+DISTRO = "jazzy"
+ROS2 = str(PEERS_DIR / DISTRO / "bin" / "ros2")
+NODES = 10
+Check = Callable[[str], bool]
+
+
+def start_graph(env: dict[str, str], scratch: Path) -> tuple[list[RclpyPeer], dict[str, set[str]]]:
+    """NODES peers, each with 4 topics of its own; 3 services and 2 actions among them."""
+    peers, expected = [], {"node": set(), "topic": set(), "service": set(), "action": set()}
+    for i in range(NODES):
+        args = ["--name", f"bench_{i}", "--talk", f"/talk_{i}", "--rate", "2",
+                "--listen", f"/talk_{(i + 1) % NODES}", "--repeat", f"std_msgs/msg/Int32=/count_{i}",
+                "--repeat", f"std_msgs/msg/Float64=/value_{i}", "--stamped", f"/point_{i}"]  # fmt: skip
+        expected["topic"] |= {f"/talk_{i}", f"/count_{i}", f"/value_{i}", f"/point_{i}"}
+        if i < 3:
+            args += ["--service", f"/set_{i}"]
+            expected["service"].add(f"/set_{i}")
+        if i < 2:
+            args += ["--action", f"/fib_{i}"]
+            expected["action"].add(f"/fib_{i}")
+        expected["node"].add(f"/bench_{i}")
+        peers.append(RclpyPeer(DISTRO, env, scratch, args))
+    for peer in peers:
+        peer.wait_for("ready", timeout=60)
+    return peers, expected
+
+
+def timed(command: list[str], env: dict[str, str]) -> tuple[float, subprocess.CompletedProcess[str]]:
+    start = time.perf_counter()
+    done = subprocess.run(command, env=env, capture_output=True, text=True, timeout=60)
+    return time.perf_counter() - start, done
+
+
+def row(label: str, times: list[float], complete: int) -> str:
+    return f"| {label} | {statistics.median(times):.3f} s | {max(times):.3f} s | {complete}/{len(times)} |"
+
+
+def warmed(command: list[str], env: dict[str, str], check: Check, limit: float = 30.0) -> float:
+    """Seconds until a tool's warm daemon gives a complete node list (each tool gets the same chance)."""
+    start = time.perf_counter()
+    while time.perf_counter() - start < limit:
+        done = subprocess.run([*command, "node", "list"], env=env, capture_output=True, text=True, timeout=60)
+        if done.returncode == 0 and check(done.stdout):
+            break
+    return time.perf_counter() - start
+
+
+def verbs(expected: dict[str, set[str]]) -> list[tuple[list[str], Check]]:
+    def holds(kind: str) -> Check:
+        return lambda out: expected[kind] <= set(out.split())
+
+    return [
+        (["topic", "list"], holds("topic")),
+        (["node", "list"], lambda out: set(out.split()) == expected["node"]),
+        (["service", "list"], holds("service")),
+        (["action", "list"], holds("action")),
+        (["topic", "type", "/talk_0"], lambda out: out.strip() == "std_msgs/msg/String"),
+        (["node", "info", "/bench_0"], lambda out: "/talk_0: std_msgs/msg/String" in out and "/fib_0" in out),
+    ]
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--runs", type=int, default=20)
+    parser.add_argument("--cold", type=int, default=5)
+    parser.add_argument("--backend", action="append", choices=("dds", "rclpy"))
+    args = parser.parse_args()
+    backends = args.backend or ["dds", "rclpy"]
+    scratch = Path(tempfile.mkdtemp(prefix="rtb"))
+    run_dir = scratch / "run"
+    run_dir.mkdir(mode=0o700)
+    env = {**ros2_env(), "ROSTOOL_NO_DAEMON": "", "XDG_RUNTIME_DIR": str(run_dir),
+           "XDG_STATE_HOME": str(scratch / "state")}  # fmt: skip
+    fast = peer_env(env, scratch)  # ros2's (and the rclpy backend's) environment: Fast DDS on loopback
+    tools = {
+        "dds": ([VENV_PYTHON, "-m", "rostool", "--ros2-backend", "dds"], env),
+        "rclpy": (
+            [str(PEERS_DIR / DISTRO / "bin" / "python"), "-m", "rostool", "--ros2-backend", "rclpy"],
+            fast,
+        ),
+    }
+    print(f"load average at start: {os.getloadavg()[0]:.1f}")
+    peers, expected = start_graph(env, scratch)
+    print(f"graph: {NODES} nodes, {len(expected['topic']) + 2} topics, {len(expected['service'])} services "
+          f"(+ each node's parameter services), {len(expected['action'])} actions")  # fmt: skip
+    try:
+        subprocess.run([ROS2, "daemon", "start"], env=fast, check=True, capture_output=True, timeout=60)
+        all_nodes = verbs(expected)[1][1]
+        print(f"ros2's daemon complete after {warmed([ROS2], fast, all_nodes):.1f} s")
+        for backend in backends:
+            command, tool_env = tools[backend]
+            subprocess.run([*command, "daemon", "start"], env=tool_env, check=True, capture_output=True,
+                           timeout=60)  # fmt: skip
+            print(f"rostool's daemon complete after {warmed(command, tool_env, all_nodes):.1f} s")
+            print(f"\nwarm, {backend} backend: | verb | median | max | complete |")
+            for verb, check in verbs(expected):
+                ours, theirs, ours_ok, theirs_ok = [], [], 0, 0
+                for _ in range(args.runs):
+                    seconds, done = timed([*command, *verb], tool_env)
+                    ours.append(seconds)
+                    ours_ok += done.returncode == 0 and check(done.stdout)
+                    seconds, done = timed([ROS2, *verb], fast)
+                    theirs.append(seconds)
+                    theirs_ok += done.returncode == 0 and check(done.stdout)
+                ratio = statistics.median(ours) / statistics.median(theirs)
+                print(row(f"rostool {' '.join(verb)}", ours, ours_ok), f" {ratio:.2f}x ros2")
+                print(row(f"ros2 {' '.join(verb)}", theirs, theirs_ok))
+            cold, cold_ok = [], 0
+            for _ in range(args.cold):
+                subprocess.run([*command, "daemon", "stop"], env=tool_env, capture_output=True, timeout=60)
+                seconds, done = timed([*command, "topic", "list"], tool_env)
+                cold.append(seconds)
+                cold_ok += done.returncode == 0 and expected["topic"] <= set(done.stdout.split())
+            print(row(f"cold rostool topic list ({backend})", cold, cold_ok))
+            subprocess.run([*command, "daemon", "stop"], env=tool_env, capture_output=True, timeout=60)
+        empty = {**env, **ros2_env()}
+        empty.update({k: env[k] for k in ("ROSTOOL_NO_DAEMON", "XDG_RUNTIME_DIR", "XDG_STATE_HOME")})
+        command, _ = tools["dds"]
+        subprocess.run([*command, "daemon", "start"], env=empty, check=True, capture_output=True, timeout=60)
+        quiet, quiet_ok = [], 0
+        for _ in range(args.runs):
+            seconds, done = timed([*command, "topic", "list"], empty)
+            quiet.append(seconds)
+            quiet_ok += done.returncode == 0 and done.stdout == ""
+        print(row("empty graph, warm: rostool topic list (dds)", quiet, quiet_ok))
+        subprocess.run([*command, "daemon", "stop", "--all"], env=empty, capture_output=True, timeout=60)
+    finally:
+        subprocess.run([ROS2, "daemon", "stop"], env=fast, capture_output=True, timeout=60)
+        for peer in peers:
+            addresses = peer.bound_addresses()
+            peer.stop()
+            assert_loopback_only(addresses)
+        shutil.rmtree(scratch, ignore_errors=True)
+    print(f"load average at end: {os.getloadavg()[0]:.1f}")
+
+
+if __name__ == "__main__":
+    main()
