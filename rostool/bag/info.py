@@ -343,7 +343,9 @@ class _Scan:
 
 
 def _scan_mcap(path: Path) -> _Scan:
-    """Counts of an mcap without summary, by reading every record (a truncated tail is ignored)."""
+    """Counts of an mcap without summary, by reading every record (a truncated tail is ignored; data that
+    is there but cannot be read, such as a chunk that does not decompress, is an error)."""
+    from mcap.exceptions import EndOfFile
     from mcap.records import Channel, Message, Schema
     from mcap.stream_reader import StreamReader
 
@@ -361,8 +363,14 @@ def _scan_mcap(path: Path) -> _Scan:
                     schemas[record.id] = record
                 elif isinstance(record, Channel):
                     scan.channels[record.id] = (record, schemas.get(record.schema_id))
-        except Exception:  # truncated or damaged: report what was readable up to there
+        except EndOfFile:  # cut short: what came before is the bag
             pass
+        except Exception as err:  # the mcap library's and the compressors' errors
+            readable = sum(scan.counts.values())
+            raise RostoolError(
+                f"{path}: unreadable data after {readable} messages ({describe(err)}); "
+                f"`rostool bag reindex` keeps what can be read"
+            ) from err
     return scan
 
 

@@ -80,10 +80,29 @@ def load_metadata(metadata: Path) -> dict[str, Any]:
         raise MetadataError(metadata, f"damaged YAML: {yaml_problem(err)}") from err
     except (RecursionError, MemoryError, ValueError, OverflowError) as err:
         raise MetadataError(metadata, f"damaged YAML: {one_line(str(err)) or type(err).__name__}") from err
+    if _shares_containers(info):
+        raise MetadataError(
+            metadata, "YAML anchors/aliases repeating a list or mapping are refused (rosbag2 writes none)"
+        )
     body = info.get("rosbag2_bagfile_information") if isinstance(info, dict) else None
     if not isinstance(body, dict):
         raise MetadataError(metadata, "not rosbag2 metadata (no rosbag2_bagfile_information mapping)")
     return body
+
+
+def _shares_containers(root: object) -> bool:
+    """Whether a list or mapping is reached twice: YAML aliases, which a "billion laughs" nests so that
+    walking (printing, converting) the small loaded graph never ends."""
+    seen: set[int] = set()
+    stack = [root]
+    while stack:
+        node = stack.pop()
+        if isinstance(node, dict | list):
+            if id(node) in seen:
+                return True
+            seen.add(id(node))
+            stack.extend(node.values() if isinstance(node, dict) else node)
+    return False
 
 
 def _int(value: object) -> bool:
@@ -169,6 +188,9 @@ def sniff(path: Path) -> BagKind | None:
 
 def detect(given: str | Path) -> BagInput:
     """Classify `given`; raises RostoolError with one clear line when it is not a readable bag."""
+    from rostool.bag.bounded import install
+
+    install()  # whatever reads the bag next inflates no chunk past its declared size
     path = Path(given)
     if not path.exists():
         raise RostoolError(f"{path}: no such file or directory")
