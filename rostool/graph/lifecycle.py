@@ -1,0 +1,111 @@
+"""ROS 2 lifecycle nodes (lifecycle_msgs' services `<node>/get_state`,
+`get_available_transitions`, `get_transition_graph`, `change_state`), on any ROS 2 backend through the
+Graph protocol's `services()`, `node_names()` and `service_call()`.
+
+Which nodes are lifecycle nodes, and which transitions a `set` may name, follow ros2lifecycle (ros2cli):
+a node is one when it serves `<node>/get_state` of type lifecycle_msgs/srv/GetState.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from dataclasses import dataclass
+from typing import Any
+
+from rostool.errors import RostoolError
+from rostool.graph.base import hidden_name
+
+GET_STATE = "lifecycle_msgs/srv/GetState"
+CHANGE_STATE = "lifecycle_msgs/srv/ChangeState"
+GET_TRANSITIONS = "lifecycle_msgs/srv/GetAvailableTransitions"
+# rosbags' type stores hold lifecycle_msgs' messages but no services: their .srv text, for both backends
+SRV_DEFINITIONS = {
+    GET_STATE: "---\nState current_state\n",
+    CHANGE_STATE: "Transition transition\n---\nbool success\n",
+    GET_TRANSITIONS: "---\nTransitionDescription[] available_transitions\n",
+}
+
+
+@dataclass(frozen=True)
+class Transition:
+    id: int
+    label: str
+    start: str
+    goal: str
+
+
+def require_ros2(graph: Any, what: str) -> None:
+    if graph.style != "ros2":
+        raise RostoolError(f"{what} is a ROS 2 feature; select a ROS 2 graph with --ros2 (or ROS_VERSION=2)")
+
+
+def known_services(graph: Any, definitions: dict[str, str]) -> None:
+    """Make the backend's type support know services rosbags lacks, from their .srv text."""
+    from rostool.graph.ros2.services import register_service
+
+    for srv_type, text in definitions.items():
+        register_service(graph.types, srv_type, text)
+
+
+def lifecycle_nodes(graph: Any, include_hidden: bool) -> list[str]:
+    """The nodes serving `<node>/get_state` as lifecycle_msgs/srv/GetState, sorted (ros2lifecycle's rule:
+    hidden nodes, and nodes whose service names are hidden, only with include_hidden)."""
+    require_ros2(graph, "lifecycle")
+    served = {name for name, type_, _nodes in graph.services() if type_ == GET_STATE}
+    return sorted(
+        node
+        for node in set(graph.node_names())
+        if f"{node.rstrip('/')}/get_state" in served
+        and (include_hidden or not hidden_name(f"{node.rstrip('/')}/get_state"))
+    )
+
+
+def absolute_node_name(name: str) -> str:
+    return name if name.startswith("/") else "/" + name
+
+
+NODE_WAIT_SECONDS = 3.5  # a Fast DDS participant may answer a newcomer only at its next 3 s announcement
+
+
+def is_lifecycle_node(graph: Any, node: str, include_hidden: bool) -> bool:
+    """Is `node` (absolute) a lifecycle node, as ros2lifecycle decides? A node not (or not fully) seen yet
+    is given NODE_WAIT_SECONDS to show up with its services."""
+    deadline = time.monotonic() + NODE_WAIT_SECONDS
+    while True:
+        if node in lifecycle_nodes(graph, include_hidden=True):
+            return include_hidden or not hidden_name(f"{node.rstrip('/')}/get_state")
+        if time.monotonic() >= deadline:
+            return False
+        time.sleep(0.2)
+
+
+def _call(graph: Any, node: str, service: str, srv_type: str, request: dict[str, Any] | None = None) -> Any:
+    known_services(graph, SRV_DEFINITIONS)
+    values = (srv_type, json.dumps(request)) if request else (srv_type,)
+    _request, response = graph.service_call(f"{node.rstrip('/')}/{service}", values)
+    return response
+
+
+def get_state(graph: Any, node: str) -> tuple[str, int]:
+    """(label, id) of the node's current state."""
+    state = _call(graph, node, "get_state", GET_STATE).current_state
+    return str(state.label), int(state.id)
+
+
+def transitions(graph: Any, node: str, every: bool = False) -> list[Transition]:
+    """The transitions available from the node's current state (every: its whole transition graph)."""
+    service = "get_transition_graph" if every else "get_available_transitions"
+    response = _call(graph, node, service, GET_TRANSITIONS)
+    return [
+        Transition(
+            int(t.transition.id), str(t.transition.label), str(t.start_state.label), str(t.goal_state.label)
+        )
+        for t in response.available_transitions
+    ]
+
+
+def change_state(graph: Any, node: str, transition: Transition) -> bool:
+    """Trigger a transition; True when the node reports it successful."""
+    request = {"transition": {"id": transition.id, "label": transition.label}}
+    return bool(_call(graph, node, "change_state", CHANGE_STATE, request).success)
