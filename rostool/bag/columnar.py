@@ -271,15 +271,22 @@ class ColumnarDecoder:
     def decode_slices(self, buffer: bytes, starts: np.ndarray, sizes: np.ndarray) -> list[Any]:
         """As `decode`, for messages given as slices of one buffer (a chunk's): gathered straight into the
         row-per-message array when they share one size."""
+        view = memoryview(buffer)
         if len(starts) and sizes.min() == sizes.max():
-            size = int(sizes[0])
-            whole = np.frombuffer(buffer, dtype=np.uint8)
-            matrix = whole[starts[:, None] + np.arange(size)]
-            first = buffer[int(starts[0]) : int(starts[0]) + size]
-            arrays = self._uniform_rows(matrix, first)
+            size, first = int(sizes[0]), int(starts[0])
+            steps = np.diff(starts)
+            if len(steps) and (steps == steps[0]).all() and steps[0] >= size:  # evenly spaced: a strided view
+                whole = np.frombuffer(buffer, dtype=np.uint8)
+                matrix = np.lib.stride_tricks.as_strided(
+                    whole[first:], shape=(len(starts), size), strides=(int(steps[0]), 1), writeable=False
+                )
+            else:
+                joined = b"".join([view[s : s + size] for s in starts.tolist()])
+                matrix = np.frombuffer(joined, dtype=np.uint8).reshape(len(starts), size)
+            arrays = self._uniform_rows(matrix, bytes(view[first : first + size]))
             if arrays is not None:
                 return arrays
-        return self.decode([buffer[int(s) : int(s) + int(n)] for s, n in zip(starts, sizes, strict=True)])
+        return self.decode([view[s : s + n] for s, n in zip(starts.tolist(), sizes.tolist(), strict=True)])
 
     def _uniform(self, datas: Sequence[bytes | memoryview]) -> list[Any] | None:
         """The batch's columns when every message has the first one's layout; None otherwise."""

@@ -315,7 +315,10 @@ class _ParquetSink:
 
         self._pa = pa
         self.schema = pa.schema([(column.name, arrow_type(column.spec)) for column in columns])
-        self.writer = pq.ParquetWriter(path, self.schema, compression="zstd")
+        # dictionaries only where values repeat by nature (strings, bytes): tried on every float column they
+        # cost most of the write time and make the file larger
+        texts = [f.name for f in self.schema if pa.types.is_string(f.type) or pa.types.is_binary(f.type)]
+        self.writer = pq.ParquetWriter(path, self.schema, compression="zstd", use_dictionary=texts)
         self._closed = False
 
     def write(self, values: list[list[Any]]) -> None:

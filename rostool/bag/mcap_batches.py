@@ -150,7 +150,14 @@ def _split(data: bytes, channels: Collection[int], path: Path) -> Iterator[Chann
     unpack_record, unpack_head = _RECORD.unpack_from, _MESSAGE_HEAD.unpack_from
     pos, end = 0, len(data)
     head = _RECORD.size + _MESSAGE_HEAD.size
+    run: int | None = None
+    tried = False
     while pos + _RECORD.size <= end:
+        if not tried and data[pos] == _MESSAGE:
+            tried = True  # once per chunk, at its first message
+            run = _uniform_run(data, pos)
+            if run is not None:  # the rest of the chunk: one channel's messages of one size
+                break
         opcode, length = unpack_record(data, pos)
         if opcode == _MESSAGE and length >= _MESSAGE_HEAD.size:
             channel, _seq, log_time, _pub = unpack_head(data, pos + _RECORD.size)
@@ -162,8 +169,18 @@ def _split(data: bytes, channels: Collection[int], path: Path) -> Iterator[Chann
                 lists[1].append(length - _MESSAGE_HEAD.size)
                 lists[2].append(log_time)
         pos += _RECORD.size + length
+    if run is not None:
+        yield from _batches_of(data, found)  # none, as a rule: records before the first message are not
+        yield from _run_batch(data, pos, run, channels)
+        return
     if pos != end:
         raise RostoolError(f"{path}: a chunk's last record runs past its end; try `rostool bag reindex`")
+    yield from _batches_of(data, found)
+
+
+def _batches_of(
+    data: bytes, found: dict[int, tuple[list[int], list[int], list[int]]]
+) -> Iterator[ChannelBatch]:
     for channel, (starts, sizes, times) in found.items():
         log_times = np.array(times, dtype=np.int64)
         starts_array = np.array(starts, dtype=np.int64)
@@ -172,3 +189,38 @@ def _split(data: bytes, channels: Collection[int], path: Path) -> Iterator[Chann
             order = np.argsort(log_times, kind="stable")
             log_times, starts_array, sizes_array = log_times[order], starts_array[order], sizes_array[order]
         yield ChannelBatch(channel, data, starts_array, sizes_array, log_times)
+
+
+def _uniform_run(data: bytes, pos: int) -> int | None:
+    """The number of records from `pos` to the chunk's end when all are Message records of one channel and
+    one length (a chunk of a single fixed-size topic: read without a Python step per message)."""
+    length = _RECORD.unpack_from(data, pos)[1]
+    stride = _RECORD.size + length
+    if length < _MESSAGE_HEAD.size or (len(data) - pos) % stride:
+        return None
+    count = (len(data) - pos) // stride
+    records = np.frombuffer(data, dtype=np.uint8, offset=pos).reshape(count, stride)
+    channel = records[0, 9:11]
+    if not (
+        (records[:, 0] == _MESSAGE).all()
+        and (records[:, 1:9] == records[0, 1:9]).all()
+        and (records[:, 9:11] == channel).all()
+    ):
+        return None
+    return count
+
+
+def _run_batch(data: bytes, pos: int, count: int, channels: Collection[int]) -> Iterator[ChannelBatch]:
+    length = _RECORD.unpack_from(data, pos)[1]
+    stride = _RECORD.size + length
+    channel = int.from_bytes(data[pos + 9 : pos + 11], "little")
+    if channel not in channels:
+        return
+    records = np.frombuffer(data, dtype=np.uint8, offset=pos).reshape(count, stride)
+    log_times = np.ascontiguousarray(records[:, 15:23]).view("<u8").ravel().astype(np.int64)
+    starts = pos + np.arange(count, dtype=np.int64) * stride + _RECORD.size + _MESSAGE_HEAD.size
+    sizes = np.full(count, length - _MESSAGE_HEAD.size, dtype=np.int64)
+    if count > 1 and (np.diff(log_times) < 0).any():
+        order = np.argsort(log_times, kind="stable")
+        log_times, starts = log_times[order], starts[order]
+    yield ChannelBatch(channel, data, starts, sizes, log_times)
