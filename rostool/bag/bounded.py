@@ -42,6 +42,11 @@ def inflate(kind: str, data: bytes | memoryview, declared: int, partial: bool = 
     return out
 
 
+def inflate_prefix(kind: str, data: bytes | memoryview, declared: int) -> bytes:
+    """For recovery: what a (possibly cut-short, possibly hostile) chunk gives, at most `declared` bytes."""
+    return _DECODERS[kind](bytes(data), declared)[0]
+
+
 Decoded = tuple[bytes, Exception | None]  # what came out before the end (or the error)
 
 

@@ -14,15 +14,15 @@ storage files hold. The original directory's files are kept in `DIR.orig/` (hard
 
 from __future__ import annotations
 
-import bz2
 import errno
 import os
-from collections.abc import Callable
+import struct
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, BinaryIO
 
 from rostool.bag import ros1_format as fmt
+from rostool.bag.bounded import inflate_prefix
 from rostool.bag.open import describe, detect
 from rostool.errors import RostoolError
 
@@ -80,32 +80,13 @@ class _Chunk:
     entries: dict[int, list[tuple[int, int]]] = field(default_factory=dict)  # conn -> [(time, offset)]
 
 
-def _decompressor(compression: str) -> Callable[[bytes], bytes]:
+def _inflate(compression: str, data: bytes, declared: int) -> bytes:
+    """The chunk's records, at most the size its header declares (a cut-short stream gives its prefix)."""
     if compression == "none":
-        return lambda data: data
-    if compression == "bz2":
-        return _partial_bz2
-    if compression == "lz4":
-        return _partial_lz4
-    raise RostoolError(f"chunk compression {compression!r} is not supported")
-
-
-def _partial_bz2(data: bytes) -> bytes:
-    decompressor = bz2.BZ2Decompressor()
-    try:
-        return decompressor.decompress(data)
-    except (OSError, EOFError, ValueError):
-        return b""
-
-
-def _partial_lz4(data: bytes) -> bytes:
-    import lz4.frame
-
-    decompressor = lz4.frame.LZ4FrameDecompressor()
-    try:
-        return bytes(decompressor.decompress(data))
-    except RuntimeError:
-        return b""
+        return data
+    if compression not in ("bz2", "lz4"):
+        raise RostoolError(f"chunk compression {compression!r} is not supported")
+    return inflate_prefix(compression, data, declared)
 
 
 def _scan_chunk(raw: bytes, connections: dict[int, tuple[dict[str, bytes], bytes]]) -> tuple[int, _Entries]:
@@ -204,7 +185,9 @@ def _recover_chunk(
     connections: dict[int, tuple[dict[str, bytes], bytes]],
 ) -> _Chunk | None:
     compression = fields.get("compression", b"none").decode(errors="replace")
-    raw = _decompressor(compression)(data)
+    size = fields.get("size", b"")
+    declared = int.from_bytes(size, "little") if len(size) == 4 else len(data) * 8
+    raw = _inflate(compression, data, declared)
     used, entries = _scan_chunk(raw, connections)
     if complete and compression != "none" and used == len(raw):
         return _Chunk(fields, data, entries)  # keep the compressed bytes as they are
@@ -324,8 +307,62 @@ def reindex_mcap(path: Path, tmp: Path) -> tuple[int, int, bool]:
                 raise RostoolError(f"{path}: cannot rebuild it: {describe(err)}") from err
         if writer is None:
             raise RostoolError(f"{path}: no readable mcap header")
+        from_cut = 0
+        if truncated:  # the stream reader skips a chunk the file ends in: take its complete records
+            for record in _cut_chunk_records(source, path.stat().st_size):
+                from_cut += _copy_record(record, writer, schemas, channels)
         writer.finish()
-    return messages, 0, truncated
+    return messages + from_cut, 0, from_cut > 0
+
+
+_TOP = struct.Struct("<BQ")  # an mcap record's opcode and length
+_CHUNK_START = struct.Struct("<QQQI")  # message start/end time, uncompressed size, crc
+_OP_CHUNK = 0x06
+
+
+def _cut_chunk_records(handle: BinaryIO, size: int) -> list[Any]:
+    """The complete records inside the chunk an mcap file ends in the middle of (a recorder killed while
+    writing it), decompressed no further than the size the chunk declares; [] when the file does not end
+    inside a chunk."""
+    from io import BytesIO
+
+    from mcap.stream_reader import StreamReader
+
+    pos = 8  # after the magic
+    while True:
+        handle.seek(pos)
+        head = handle.read(_TOP.size)
+        if len(head) < _TOP.size:
+            return []
+        opcode, length = _TOP.unpack(head)
+        if pos + _TOP.size + length <= size:
+            pos += _TOP.size + length
+            continue
+        if opcode != _OP_CHUNK:
+            return []
+        body = handle.read(size - pos - _TOP.size)
+        break
+    try:
+        _start, _end, declared, _crc = _CHUNK_START.unpack_from(body, 0)
+        (name_length,) = struct.unpack_from("<I", body, _CHUNK_START.size)
+        at = _CHUNK_START.size + 4
+        compression = body[at : at + name_length].decode("ascii")
+        data = body[at + name_length + 8 :]
+    except (struct.error, UnicodeDecodeError):
+        return []
+    if compression in ("zstd", "lz4"):
+        raw = inflate_prefix(compression, data, declared)
+    elif compression == "":
+        raw = data[:declared]
+    else:
+        return []
+    records: list[Any] = []
+    try:
+        for record in StreamReader(BytesIO(raw), skip_magic=True).records:
+            records.append(record)
+    except Exception:  # the last, incomplete record (or damage): what came before is true
+        pass
+    return records
 
 
 def _copy_record(record: object, writer: Any, schemas: dict[int, int], channels: dict[int, int]) -> int:
