@@ -71,6 +71,17 @@ def warmed(command: list[str], env: dict[str, str], check: Check, limit: float =
     return time.perf_counter() - start
 
 
+def at_once(command: list[str], env: dict[str, str], topics: set[str], label: str, calls: int = 50) -> str:
+    """CALLS `topic list` started together: how many answered complete, and the wall time of all."""
+    start = time.perf_counter()
+    quiet = {"stdout": subprocess.PIPE, "stderr": subprocess.DEVNULL, "text": True}
+    running = [subprocess.Popen(command, env=env, **quiet) for _ in range(calls)]  # type: ignore[call-overload]
+    outputs = [(proc.communicate(timeout=120)[0], proc.returncode) for proc in running]
+    complete = sum(code == 0 and topics <= set(out.split()) for out, code in outputs)
+    seconds = time.perf_counter() - start
+    return f"| {calls} x topic list at once, {label} | {seconds:.2f} s (all) | | {complete}/{calls} |"
+
+
 def verbs(expected: dict[str, set[str]]) -> list[tuple[list[str], Check]]:
     def holds(kind: str) -> Check:
         return lambda out: expected[kind] <= set(out.split())
@@ -106,18 +117,23 @@ def main() -> None:
         ),
     }
     print(f"load average at start: {os.getloadavg()[0]:.1f}")
+    # every daemon starts before the graph: with the loopback profile a Fast DDS participant only probes
+    # the first participant ids on 127.0.0.1, so one started after ten peers would miss some of them
+    subprocess.run([ROS2, "daemon", "start"], env=fast, check=True, capture_output=True, timeout=60)
+    for backend in backends:
+        command, tool_env = tools[backend]
+        subprocess.run(
+            [*command, "daemon", "start"], env=tool_env, check=True, capture_output=True, timeout=60
+        )
     peers, expected = start_graph(env, scratch)
     print(f"graph: {NODES} nodes, {len(expected['topic']) + 2} topics, {len(expected['service'])} services "
           f"(+ each node's parameter services), {len(expected['action'])} actions")  # fmt: skip
     try:
-        subprocess.run([ROS2, "daemon", "start"], env=fast, check=True, capture_output=True, timeout=60)
         all_nodes = verbs(expected)[1][1]
         print(f"ros2's daemon complete after {warmed([ROS2], fast, all_nodes):.1f} s")
         for backend in backends:
             command, tool_env = tools[backend]
-            subprocess.run([*command, "daemon", "start"], env=tool_env, check=True, capture_output=True,
-                           timeout=60)  # fmt: skip
-            print(f"rostool's daemon complete after {warmed(command, tool_env, all_nodes):.1f} s")
+            print(f"rostool's {backend} daemon complete after {warmed(command, tool_env, all_nodes):.1f} s")
             print(f"\nwarm, {backend} backend: | verb | median | max | complete |")
             for verb, check in verbs(expected):
                 ours, theirs, ours_ok, theirs_ok = [], [], 0, 0
@@ -131,6 +147,10 @@ def main() -> None:
                 ratio = statistics.median(ours) / statistics.median(theirs)
                 print(row(f"rostool {' '.join(verb)}", ours, ours_ok), f" {ratio:.2f}x ros2")
                 print(row(f"ros2 {' '.join(verb)}", theirs, theirs_ok))
+            print(at_once([*command, "topic", "list"], tool_env, expected["topic"], f"rostool ({backend})"))
+        print(at_once([ROS2, "topic", "list"], fast, expected["topic"], "ros2"))
+        for backend in backends:
+            command, tool_env = tools[backend]
             cold, cold_ok = [], 0
             for _ in range(args.cold):
                 subprocess.run([*command, "daemon", "stop"], env=tool_env, capture_output=True, timeout=60)
@@ -138,7 +158,6 @@ def main() -> None:
                 cold.append(seconds)
                 cold_ok += done.returncode == 0 and expected["topic"] <= set(done.stdout.split())
             print(row(f"cold rostool topic list ({backend})", cold, cold_ok))
-            subprocess.run([*command, "daemon", "stop"], env=tool_env, capture_output=True, timeout=60)
         empty = {**env, **ros2_env()}
         empty.update({k: env[k] for k in ("ROSTOOL_NO_DAEMON", "XDG_RUNTIME_DIR", "XDG_STATE_HOME")})
         command, _ = tools["dds"]
@@ -149,8 +168,9 @@ def main() -> None:
             quiet.append(seconds)
             quiet_ok += done.returncode == 0 and done.stdout == ""
         print(row("empty graph, warm: rostool topic list (dds)", quiet, quiet_ok))
-        subprocess.run([*command, "daemon", "stop", "--all"], env=empty, capture_output=True, timeout=60)
     finally:
+        stop_all = [VENV_PYTHON, "-m", "rostool", "daemon", "stop", "--all"]
+        subprocess.run(stop_all, env=env, capture_output=True, timeout=60)
         subprocess.run([ROS2, "daemon", "stop"], env=fast, capture_output=True, timeout=60)
         for peer in peers:
             addresses = peer.bound_addresses()

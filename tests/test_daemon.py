@@ -81,6 +81,16 @@ def names(done: subprocess.CompletedProcess[str]) -> list[str]:
     return done.stdout.split()
 
 
+def answered_then_replaced(env: dict[str, str], node: str, old: dict[str, object]) -> dict[str, object]:
+    """`node list` answers right (directly, without a word on stderr), and a new daemon then serves: its
+    status."""
+    listed = rostool(["node", "list"], env)
+    assert names(listed) == [node] and listed.stderr == ""
+    assert wait_until(lambda: status(env).get("pid") not in (None, old.get("pid")), timeout=20)
+    assert names(rostool(["node", "list"], env)) == [node]
+    return status(env)
+
+
 LISTINGS = [
     ["topic", "list", "-t"],
     ["node", "list"],
@@ -142,12 +152,8 @@ def test_a_killed_daemon_is_replaced_and_the_query_still_answers(
     os.kill(int(str(first["pid"])), signal.SIGKILL)
     assert wait_until(lambda: not status(graph_env)["running"])
     assert Path(str(first["socket"])).exists()  # the dead daemon's stale socket
-    listed = rostool(["node", "list"], graph_env)
-    assert names(listed) == ["/survivor"] and listed.stderr == ""
-    assert wait_until(lambda: status(graph_env)["running"] is True, timeout=20)
-    second = status(graph_env)
+    second = answered_then_replaced(graph_env, "/survivor", first)
     assert second["pid"] != first["pid"]
-    assert names(rostool(["node", "list"], graph_env)) == ["/survivor"]
 
 
 @pytest.mark.parametrize("distro", ["jazzy"])
@@ -161,9 +167,7 @@ def test_a_stale_socket_file_is_replaced(
     orphan.bind(str(path))  # bound, never listening, closed: what a killed process leaves
     orphan.close()
     os.chmod(path, 0o600)
-    assert names(rostool(["node", "list"], graph_env)) == ["/stale_check"]
-    assert wait_until(lambda: status(graph_env)["running"] is True, timeout=20)
-    assert names(rostool(["node", "list"], graph_env)) == ["/stale_check"]
+    answered_then_replaced(graph_env, "/stale_check", {})
 
 
 @pytest.mark.parametrize("distro", ["jazzy"])
@@ -173,11 +177,8 @@ def test_a_daemon_of_another_build_is_replaced(
     start_peer("--name", "versioned")
     old = started({**graph_env, "ROSTOOL_DAEMON_BUILD": "0.0.1-old"})
     assert old["build"] == "0.0.1-old"
-    assert names(rostool(["node", "list"], graph_env)) == ["/versioned"]
-    assert wait_until(lambda: status(graph_env).get("pid") not in (None, old["pid"]), timeout=20)
-    new = status(graph_env)
+    new = answered_then_replaced(graph_env, "/versioned", old)
     assert new["build"] != "0.0.1-old"
-    assert names(rostool(["node", "list"], graph_env)) == ["/versioned"]
 
 
 @pytest.mark.parametrize("distro", ["jazzy"])

@@ -125,13 +125,15 @@ class DaemonClient:
             fcntl.flock(handle, fcntl.LOCK_UN)
             return None
 
-    def start_detached(self, idle: float | None = None) -> subprocess.Popen[bytes]:
+    def start_detached(self, idle: float | None = None, replacing: bool = False) -> subprocess.Popen[bytes]:
         """Start the daemon in its own session, its output in its log; the caller does not wait for it."""
         log_dir = private_dir(state_dir(self.env))
         env = {**self.env, NO_DAEMON_ENV: "1"}
         args = [sys.executable, "-m", "rostool.graph.daemon", "--backend", self.requested]
         if idle is not None:
             args += ["--idle", str(idle)]
+        if replacing:
+            args.append("--replace")
         with open(log_dir / self.place.log.name, "a", encoding="utf-8") as log:
             os.chmod(log.name, 0o600)
             return subprocess.Popen(
@@ -157,8 +159,8 @@ class DaemonClient:
                 found = self.status()
                 if found is not None:
                     return found
-            if started is not None and started.poll() is not None:
-                return None
+            if started is not None and started.poll() is not None and self.lock_holder() is None:
+                return None  # it gave up, and no other daemon is starting
             time.sleep(0.05)
         return None
 

@@ -71,7 +71,7 @@ class DaemonGraph:
             except DaemonAbsent:
                 self._start()
             except OtherBuild:
-                self._client.start_detached()  # the old one is stopping; the new one waits for its lock
+                self._client.start_detached(replacing=True)  # it waits for the old one's lock
             except DaemonSilent as err:
                 self._warn(f"the graph daemon did not answer ({err}); answering directly "
                            "(`rostool daemon stop` resets it)")  # fmt: skip

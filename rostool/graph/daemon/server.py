@@ -181,11 +181,12 @@ def bind(path: Path) -> socket.socket:
 
 
 @contextlib.contextmanager
-def held_lock(place: DaemonPlace) -> Iterator[IO[str] | None]:
-    """The key's lock, with this pid written in it; None when another daemon keeps it too long."""
+def held_lock(place: DaemonPlace, wait: float) -> Iterator[IO[str] | None]:
+    """The key's lock, with this pid written in it; None when another daemon keeps it past `wait` seconds
+    (a replacement waits for the daemon it replaces; a daemon started with others at once does not)."""
     handle = open(place.lock, "a+", encoding="utf-8")  # noqa: SIM115 (held for the daemon's life)
     os.chmod(place.lock, 0o600)
-    deadline = time.monotonic() + LOCK_WAIT_SECONDS
+    deadline = time.monotonic() + wait
     try:
         while True:
             try:
@@ -212,17 +213,17 @@ def _setup_log() -> None:
     )
 
 
-def run(requested: str, idle: float) -> int:
+def run(requested: str, idle: float, replacing: bool = False) -> int:
     place = daemon_place(requested)
     _setup_log()
     daemon = Daemon(place, requested, idle)
     signal.signal(signal.SIGTERM, lambda *_: daemon.stopping.set())
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # detached: only `daemon stop` or SIGTERM end it
     signal.signal(signal.SIGHUP, signal.SIG_IGN)
-    with held_lock(place) as lock:
+    with held_lock(place, LOCK_WAIT_SECONDS if replacing else 0.0) as lock:
         if lock is None:
-            log.error("another daemon keeps %s: not starting", place.lock)
-            return 1
+            log.info("another daemon keeps %s: not starting", place.lock)
+            return 0
         log.info("starting (build %s, key %s)", daemon.build, dict(place.fields))
         try:
             daemon.open_graph()
@@ -241,5 +242,6 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m rostool.graph.daemon")
     parser.add_argument("--backend", choices=("auto", "rclpy", "dds"), default="auto")
     parser.add_argument("--idle", type=float, default=float(os.environ.get(IDLE_ENV) or DEFAULT_IDLE_SECONDS))
+    parser.add_argument("--replace", action="store_true", help="wait for the daemon being replaced")
     args = parser.parse_args(argv)
-    return run(args.backend, args.idle)
+    return run(args.backend, args.idle, args.replace)
