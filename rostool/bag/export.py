@@ -67,7 +67,19 @@ def require_extras(options: ExportOptions) -> None:
 
 
 def topic_file(topic: str) -> str:
-    return topic.strip("/").replace("/", ".") or "_"
+    """The file name of a topic, one to one: the leading `/` dropped, each other `/` a `.`, letters,
+    digits, `_` and `-` kept, every other byte `%XX` (so `/a/b` -> `a.b`, `/a.b` -> `a%2Eb`); `/` alone
+    is `%2F`. A relative name (`a`, in some ROS 2 bags) is the root namespace's `/a`, and so its file."""
+    body = topic[1:] if topic.startswith("/") else topic
+    if not body:
+        return "%2F"
+    return "".join(
+        "." if char == "/" else char if char in _KEPT else "".join(f"%{b:02X}" for b in char.encode())
+        for char in body
+    )
+
+
+_KEPT = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_-")
 
 
 def table_path(out: Path, topic: str, fmt: TableFormat, partition: str | None) -> Path:

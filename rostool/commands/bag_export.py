@@ -48,8 +48,10 @@ def export(
     then every field, nested ones flattened (`pose.position.x`); Time fields as two integer columns
     (`header.stamp.sec`/`nanosec`, ROS 1: `secs`/`nsecs`); byte arrays (uint8[], image data) as binary;
     other arrays as typed lists in Parquet and as JSON text in CSV. One bag writes DIR/TOPIC.parquet
-    (`/turtle1/pose` -> `turtle1.pose.parquet`). Several bags, or a directory of bags, write one dataset
-    per topic partitioned by bag, hive-style: DIR/TOPIC/bag=NAME/part-0.parquet, exported in parallel.
+    (`/turtle1/pose` -> `turtle1.pose.parquet`; any character but letters, digits, `_` and `-` is written
+    %XX, so no two topics share a file: `/a.b` -> `a%2Eb.parquet`). Several bags, or a directory of bags,
+    write one dataset per topic partitioned by bag, hive-style: DIR/TOPIC/bag=NAME/part-0.parquet, exported
+    in parallel.
 
     \b
     Examples:
