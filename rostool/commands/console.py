@@ -44,8 +44,8 @@ def render(entry: con.LogEntry) -> str:
 
 
 @console.command("echo")
-@click.option("-l", "--level", "min_level", default="debug", metavar="LEVEL",
-              help="Only messages at LEVEL or above (debug, info, warn, error, fatal).")  # fmt: skip
+@click.option("-l", "--level", "min_level", default="debug", help="Only messages at this level or above.",
+              type=click.Choice(con.LEVELS, case_sensitive=False))  # fmt: skip
 @click.option(
     "--node", "node", metavar="NODE", help="Only messages of NODE (ROS 2: its logger and children)."
 )
