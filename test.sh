@@ -21,6 +21,7 @@ fi
 # The real ROS 2 peers: rclpy with Fast DDS (rmw_fastrtps_cpp) and the message packages the tests use, one
 # venv per distro, cached outside the repo (ROSTOOL_PEERS_DIR) and reinstalled only when this list changes.
 export ROSTOOL_PEERS_DIR="${ROSTOOL_PEERS_DIR:-$HOME/.cache/rostool/peers}"
+rostool_stamp() { echo "$(pwd) $(md5sum pyproject.toml)"; }  # an editable rostool is current while this holds
 ros2_messages=(std-msgs std-srvs test-msgs geometry-msgs sensor-msgs nav-msgs lifecycle-msgs rcl-interfaces
   action-msgs ament-index-python)
 for distro in jazzy kilted; do
@@ -33,9 +34,12 @@ for distro in jazzy kilted; do
     "$venv/bin/python" -m pip install -q --disable-pip-version-check "${peer_packages[@]}"
     echo "${peer_packages[*]}" > "$venv/.installed"
   fi
-  # rostool itself (editable, with its dependencies) for the rclpy backend's tests: cheap, and on every
-  # run, since the checkout may have moved and the dependencies may have changed
-  "$venv/bin/python" -m pip install -q --disable-pip-version-check -e .
+  # rostool itself (editable, with its dependencies) for the rclpy backend's tests: again when the checkout
+  # moved or pyproject.toml (the dependencies, the entry point) changed
+  if [ "$(cat "$venv/.rostool" 2>/dev/null)" != "$(rostool_stamp)" ]; then
+    "$venv/bin/python" -m pip install -q --disable-pip-version-check -e .
+    rostool_stamp > "$venv/.rostool"
+  fi
 done
 
 # The real `ros2` (ros2cli of Jazzy, pure Python, not on pip) beside the Jazzy peers, as the referee of rostool's
@@ -66,6 +70,12 @@ fi
 if [ ! -x .venv/bin/python ]; then
   python3 -m venv .venv
 fi
-.venv/bin/python -m pip install -q --disable-pip-version-check -e '.[test]'
+if [ "$(cat .venv/.rostool 2>/dev/null)" != "$(rostool_stamp)" ]; then
+  .venv/bin/python -m pip install -q --disable-pip-version-check -e '.[test]'
+  rostool_stamp > .venv/.rostool
+fi
 .venv/bin/python -m ruff check rostool tests bench
-exec .venv/bin/python -m pytest -q "$@"
+# pytest-xdist: the suite mostly waits (DDS discovery, peers starting), so more workers than cores pay off
+# (CONTRIBUTING.md, "Test suite timing"); loadgroup keeps xdist_group-marked tests on one worker.
+# Arguments given to test.sh come last and win (`./test.sh -n 0 tests/test_cli.py`).
+exec .venv/bin/python -m pytest -q -n 6 --dist loadgroup "$@"

@@ -1,7 +1,10 @@
-"""Fixtures: each test gets its own master on a free loopback port."""
+"""Fixtures: each test gets its own master on a free loopback port. Scheduling under pytest-xdist: the
+longest tests first, and tests marked `alone` (they measure rates or time windows) while no other runs."""
 
 from __future__ import annotations
 
+import fcntl
+import os
 import subprocess
 from collections.abc import Iterator
 from pathlib import Path
@@ -21,6 +24,59 @@ from tests.support import (
 
 # the real ROS 2 peers' fixtures (distro, graph_env, start_peer)
 pytest_plugins = ("tests.ros2_peers", "tests.ros2_backends")
+
+# Modules whose tests each take half a minute or more (dozens of rostool runs against one graph): started
+# first, so that no xdist worker begins one of them when the others are nearly done
+LONG_MODULES = {
+    "test_ros2cli_forms",
+    "test_ros2cli_forms_param",
+    "test_ros2cli_forms_service_action",
+    "test_ros2cli_parity",
+    "test_ros2_fastdds_rpc",
+    "test_ros2_real_bad_input",
+    "test_bad_input_live",
+}
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    config.addinivalue_line(
+        "markers", "alone: measures a rate or a time window: runs while no other test of the session runs"
+    )
+
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """Long modules first, `alone` tests last (they stop the other workers while they run); otherwise the
+    order of the files. Every xdist worker sorts alike, so their collections stay identical."""
+
+    def rank(item: pytest.Item) -> int:
+        if item.get_closest_marker("alone"):
+            return 2
+        return 0 if item.path.stem in LONG_MODULES else 1
+
+    items.sort(key=rank)
+
+
+@pytest.fixture(autouse=True)
+def _alone_when_marked(
+    request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory
+) -> Iterator[None]:
+    """Under xdist, a test marked `alone` holds the session's gate exclusively, every other test shares it.
+    A turnstile taken before the gate keeps a waiting `alone` test from being starved by the others."""
+    if not os.environ.get("PYTEST_XDIST_WORKER"):
+        yield
+        return
+    session_dir = tmp_path_factory.getbasetemp().parent  # shared by the workers of one session
+    alone = request.node.get_closest_marker("alone") is not None
+    with open(session_dir / "turnstile.lock", "a") as turnstile, open(session_dir / "gate.lock", "a") as gate:
+        fcntl.flock(turnstile, fcntl.LOCK_EX)
+        fcntl.flock(gate, fcntl.LOCK_EX if alone else fcntl.LOCK_SH)
+        if not alone:
+            fcntl.flock(turnstile, fcntl.LOCK_UN)
+        try:
+            yield
+        finally:
+            fcntl.flock(gate, fcntl.LOCK_UN)
+            fcntl.flock(turnstile, fcntl.LOCK_UN)
 
 
 @pytest.fixture

@@ -37,10 +37,39 @@ def require_ros1_peers() -> None:
         pytest.skip(message)
 
 
+def xdist_worker() -> tuple[int, int]:
+    """(index, count) of this pytest-xdist worker ("gw3" of 6 is (3, 6)); (0, 1) in a plain run."""
+    name = os.environ.get("PYTEST_XDIST_WORKER", "")
+    count = int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1") or 1)
+    index = int(name[2:]) if name.startswith("gw") and name[2:].isdigit() else 0
+    return index % max(count, 1), max(count, 1)
+
+
+# TCP ports for the tests' servers (ROS 1 masters): below Linux's ephemeral range (32768-60999), so no
+# OS-assigned port (an outgoing connection, a node's own server) can take one between free_port() and the
+# server's bind; each xdist worker draws from its own slice, so workers never race for a port
+SERVER_PORTS = range(20000, 32000)
+
+
+def _tcp_port_free(port: int) -> bool:
+    with socket.socket() as sock:  # no SO_REUSEADDR: a port still in TIME_WAIT counts as taken
+        try:
+            sock.bind(("127.0.0.1", port))
+        except OSError:
+            return False
+    return True
+
+
 def free_port() -> int:
-    with socket.socket() as sock:
-        sock.bind(("127.0.0.1", 0))
-        return int(sock.getsockname()[1])
+    """A free loopback TCP port of this worker's slice of SERVER_PORTS (random within it, so that separate
+    pytest runs on one machine rarely meet; a port in use by anyone is skipped)."""
+    index, count = xdist_worker()
+    ports = SERVER_PORTS[index::count]
+    for _ in range(200):
+        port = random.choice(ports)
+        if _tcp_port_free(port):
+            return port
+    raise RuntimeError(f"no free loopback port in {SERVER_PORTS} for xdist worker {index} of {count}")
 
 
 def ros1_env(port: int, home: Path) -> dict[str, str]:
@@ -56,7 +85,36 @@ def ros1_env(port: int, home: Path) -> dict[str, str]:
     return env
 
 
-_used_domains: set[int] = set()
+# ROS 2 domains for the tests: Fast DDS and Cyclone put domain D's discovery ports at 7410 + 250 * D + 2 * p
+# (participant p), which for 1..100 stays below the ephemeral range, so no OS-assigned UDP port takes one.
+# Each xdist worker owns every count-th domain and cycles through them, so its domains are reused as late as
+# possible and never by another worker of the run.
+TEST_DOMAINS = range(1, 101)
+_next_domain: list[int] = []
+
+
+def _domain_in_use(domain: int) -> bool:
+    """Whether a participant (a leftover peer, another pytest run) holds domain's first discovery port."""
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sock:
+        try:
+            sock.bind(("127.0.0.1", 7410 + 250 * domain))
+        except OSError:
+            return True
+    return False
+
+
+def fresh_domain() -> int:
+    """The next ROS_DOMAIN_ID of this worker's share of TEST_DOMAINS that no participant uses now."""
+    index, count = xdist_worker()
+    domains = TEST_DOMAINS[index::count]
+    if not _next_domain:
+        _next_domain.append(random.randrange(len(domains)))  # separate runs start apart
+    for _ in range(len(domains)):
+        domain = domains[_next_domain[0] % len(domains)]
+        _next_domain[0] += 1
+        if not _domain_in_use(domain):
+            return domain
+    raise RuntimeError(f"every ROS 2 domain of xdist worker {index} of {count} is in use: {list(domains)}")
 
 
 def ros2_env(**extra: str) -> dict[str, str]:
@@ -64,10 +122,7 @@ def ros2_env(**extra: str) -> dict[str, str]:
     multicast off), no inherited ROS settings."""
     from rostool.graph.ros2.dds import cyclone_config
 
-    if len(_used_domains) >= 100:  # a long run: the earliest tests' graphs are gone, start over
-        _used_domains.clear()
-    domain = random.choice([d for d in range(100, 230) if d not in _used_domains])
-    _used_domains.add(domain)
+    domain = fresh_domain()
     env = {k: v for k, v in os.environ.items() if not k.startswith("ROS") and k != "CYCLONEDDS_URI"}
     env.update(
         ROS_VERSION="2",

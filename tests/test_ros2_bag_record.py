@@ -81,6 +81,7 @@ def foxglove_decoded(path: Path) -> list[tuple[str, str, Any]]:
         return [(c.topic, s.name, m) for s, c, _raw, m in reader.iter_decoded_messages()]
 
 
+@pytest.mark.alone
 @pytest.mark.parametrize("suffix", ["mcap", "db3"])
 def test_record_all_into_ros2_bags(
     env: dict[str, str], publishers: None, tmp_path: Path, suffix: str

@@ -84,6 +84,7 @@ def test_node_list_and_info_show_both_processes(env: dict[str, str], chatter: su
         stop(listener)
 
 
+@pytest.mark.alone
 def test_hz_and_bw_count_a_rostool_publisher(env: dict[str, str]) -> None:
     pub = rostool_popen(["topic", "pub", "/fast", "std_msgs/Int32", "data: 7", "-r", "20"], env)
     try:

@@ -233,6 +233,7 @@ def test_echo_of_a_latched_best_effort_mix_adapts(start_peer: Start, rclpy_tool:
     assert json.loads(echo.stdout)["data"].startswith("hello ")
 
 
+@pytest.mark.alone
 def test_hz_at_10_hz_and_1_khz(
     graph_env: dict[str, str], tmp_path: Path, distro: str, start_peer: Start, rclpy_tool: Tool
 ) -> None:

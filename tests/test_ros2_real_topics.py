@@ -11,6 +11,8 @@ import json
 import re
 from collections.abc import Callable
 
+import pytest
+
 from tests.ros2_peers import RclpyPeer
 from tests.support import rostool, rostool_popen, stop
 
@@ -70,6 +72,7 @@ def test_echo_receives_the_real_publishers_messages(graph_env: dict[str, str], s
     assert docs(text)[0].startswith("data: hello ")
 
 
+@pytest.mark.alone
 def test_hz_at_10_hz_and_1_khz(graph_env: dict[str, str], start_peer: Start) -> None:
     """hz agrees within 2 % with the rate the publisher itself counted over the same seconds (a Python
     publisher on a loaded machine does not keep exactly 1 kHz, so the nominal rate is no referee)."""

@@ -7,6 +7,8 @@ import re
 import time
 from pathlib import Path
 
+import pytest
+
 from tests.peers import FAST_PUBLISHER, HELLO_PUBLISHER, LATCHED_SCAN, TYPED_SUBSCRIBER
 from tests.support import debian, debian_popen, rostool, rostool_popen, start_rospy_script, stop, wait_until
 
@@ -104,6 +106,7 @@ def test_our_publisher_their_echo_and_subscriber(debian_master: dict[str, str], 
     assert "/chatter" not in debian(["rostopic", "list"], env).stdout.split()
 
 
+@pytest.mark.alone
 def test_hz_counts_a_real_publisher(debian_master: dict[str, str], tmp_path: Path) -> None:
     env = debian_master
     pub = start_rospy_script(HELLO_PUBLISHER, env, tmp_path, "hello")
