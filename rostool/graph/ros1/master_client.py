@@ -6,6 +6,7 @@ import http.client
 import threading
 import xmlrpc.client
 from typing import Any
+from xml.parsers.expat import ExpatError
 
 from rostool.errors import RostoolError
 
@@ -57,16 +58,53 @@ def call(uri: str, method: str, *args: Any, what: str, timeout: float = DEFAULT_
     """Call an XML-RPC method that answers [code, status, value]; return value or raise one clear error."""
     proxy = _cached_proxy(uri, timeout)
     try:
-        code, status, value = getattr(proxy, method)(*args)
+        reply = getattr(proxy, method)(*args)
     except OSError as err:
         _proxies.cache.pop((uri, timeout), None)  # never reuse a connection in an unknown state
         raise Unreachable(f"cannot reach {what} at {uri}: {_reason(err)}") from err
     except (xmlrpc.client.Fault, xmlrpc.client.ProtocolError) as err:
         _proxies.cache.pop((uri, timeout), None)
         raise RostoolError(f"{what} at {uri} failed on {method}: {err}") from err
+    except (xmlrpc.client.ResponseError, ExpatError) as err:  # not XML-RPC at all
+        _proxies.cache.pop((uri, timeout), None)
+        raise MalformedReply(f"{what} at {uri} answered {method} with something that is not XML-RPC") from err
+    if not (isinstance(reply, list | tuple) and len(reply) == 3 and type(reply[0]) is int):
+        shape = "not [code, status, value]"
+        raise MalformedReply(f"{what} at {uri} answered {method} with {_show(reply)}, {shape}")
+    code, status, value = reply
     if code != 1:
         raise RemoteError(f"{status}")
     return value
+
+
+class MalformedReply(RostoolError):
+    """The peer answered, but not in the shape its API defines."""
+
+
+def _show(value: Any, limit: int = 80) -> str:
+    text = " ".join(repr(value).split())
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def _strings(value: Any) -> bool:
+    return isinstance(value, list | tuple) and all(isinstance(item, str) for item in value)
+
+
+def _pairs(value: Any, second: Any = str) -> bool:
+    """[[str, X], ...]: what getTopicTypes, getPublishedTopics and each part of getSystemState answer."""
+    return isinstance(value, list | tuple) and all(
+        isinstance(item, list | tuple) and len(item) == 2 and isinstance(item[0], str) and second(item[1])
+        for item in value
+    )
+
+
+def _is_str(value: Any) -> bool:
+    return isinstance(value, str)
+
+
+def _system_state(value: Any) -> bool:
+    parts = isinstance(value, list | tuple) and len(value) == 3
+    return parts and all(_pairs(part, _strings) for part in value)
 
 
 def _reason(err: BaseException) -> str:
@@ -84,6 +122,16 @@ class MasterClient:
         self.uri = uri
         self.caller_id = caller_id
 
+    def _checked(self, method: str, valid: Any, *args: Any) -> Any:
+        """The value of a master call, checked against the shape the Master API gives it."""
+        value = self._call(method, *args)
+        if not valid(value):
+            raise MalformedReply(
+                f"the ROS master at {self.uri} answered {method} with a malformed value {_show(value)}; "
+                f"is ROS_MASTER_URI a ROS master?"
+            )
+        return value
+
     def _call(self, method: str, *args: Any) -> Any:
         try:
             return call(self.uri, method, self.caller_id, *args, what="the ROS master")
@@ -95,32 +143,32 @@ class MasterClient:
 
     # Master API
     def get_pid(self) -> int:
-        return int(self._call("getPid"))
+        return int(self._checked("getPid", lambda v: type(v) is int))
 
     def system_state(self) -> tuple[list[Any], list[Any], list[Any]]:
-        publishers, subscribers, services = self._call("getSystemState")
+        publishers, subscribers, services = self._checked("getSystemState", _system_state)
         return publishers, subscribers, services
 
     def topic_types(self) -> dict[str, str]:
-        return dict(self._call("getTopicTypes"))
+        return dict(self._checked("getTopicTypes", _pairs))
 
     def published_topics(self, subgraph: str = "") -> dict[str, str]:
-        return dict(self._call("getPublishedTopics", subgraph))
+        return dict(self._checked("getPublishedTopics", _pairs, subgraph))
 
     def lookup_node(self, name: str) -> str:
-        return str(self._call("lookupNode", name))
+        return str(self._checked("lookupNode", _is_str, name))
 
     def lookup_service(self, name: str) -> str:
-        return str(self._call("lookupService", name))
+        return str(self._checked("lookupService", _is_str, name))
 
     def register_publisher(self, topic: str, type_name: str, api: str) -> list[str]:
-        return list(self._call("registerPublisher", topic, type_name, api))
+        return list(self._checked("registerPublisher", _strings, topic, type_name, api))
 
     def unregister_publisher(self, topic: str, api: str) -> None:
         self._call("unregisterPublisher", topic, api)
 
     def register_subscriber(self, topic: str, type_name: str, api: str) -> list[str]:
-        return list(self._call("registerSubscriber", topic, type_name, api))
+        return list(self._checked("registerSubscriber", _strings, topic, type_name, api))
 
     def unregister_subscriber(self, topic: str, api: str) -> None:
         self._call("unregisterSubscriber", topic, api)
@@ -145,7 +193,7 @@ class MasterClient:
         return bool(self._call("hasParam", key))
 
     def param_names(self) -> list[str]:
-        return list(self._call("getParamNames"))
+        return list(self._checked("getParamNames", _strings))
 
     def search_param(self, key: str) -> str:
-        return str(self._call("searchParam", key))
+        return str(self._checked("searchParam", _is_str, key))

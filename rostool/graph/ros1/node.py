@@ -17,6 +17,8 @@ from rostool.graph.ros1.slave import SlaveServer
 from rostool.graph.ros1.topics import ErrorCallback, MessageCallback, Publisher, Subscription
 from rostool.interfaces.ros1 import Ros1Type
 
+UNREGISTER_BUDGET = 1.0  # seconds closing may spend unregistering from the master
+
 ServiceHandler = Any  # (socket, header) -> None; services arrive with the services work
 
 
@@ -126,8 +128,8 @@ class Node:
 
     def _handshake(self, sock: socket.socket) -> None:
         try:
+            header = tcpros.read_handshake(sock)
             sock.settimeout(5.0)
-            header = tcpros.read_header(sock.makefile("rb"))
         except (OSError, tcpros.ConnectionClosed):
             sock.close()
             return
@@ -158,13 +160,24 @@ class Node:
             subscriptions = list(self._subscriptions.values())
             self._publishers.clear()
             self._subscriptions.clear()
-        for sub in subscriptions:
-            with contextlib.suppress(RostoolError):
-                self.master.unregister_subscriber(sub.topic, self.uri)
+        for sub in subscriptions:  # nothing more arrives from here on
             sub.close()
+
+        def unregister() -> None:
+            for sub in subscriptions:
+                with contextlib.suppress(RostoolError):
+                    self.master.unregister_subscriber(sub.topic, self.uri)
+            for pub in publishers:
+                with contextlib.suppress(RostoolError):
+                    self.master.unregister_publisher(pub.topic, self.uri)
+
+        # A courtesy to the master, within a budget: a master that hangs (stopped, overloaded) must not
+        # hold up Ctrl+C; it drops a node whose API no longer answers by itself.
+        if subscriptions or publishers:
+            courtesy = threading.Thread(target=unregister, name="ros1-unregister", daemon=True)
+            courtesy.start()
+            courtesy.join(UNREGISTER_BUDGET)
         for pub in publishers:
-            with contextlib.suppress(RostoolError):
-                self.master.unregister_publisher(pub.topic, self.uri)
             pub.close()
         with contextlib.suppress(OSError):
             self._listener.close()

@@ -4,10 +4,16 @@ from __future__ import annotations
 
 import socket
 import struct
+import time
 from typing import Protocol
 
 _LENGTH = struct.Struct("<I")
 MAX_FRAME = 1 << 30
+# A connection header (fields and one message definition) is a few kilobytes; roscpp refuses absurd
+# lengths too. Past this the peer is broken or hostile: close at once, allocate nothing.
+MAX_HEADER = 4 << 20
+HANDSHAKE_TIMEOUT = 10.0  # the whole header, however slowly it trickles in
+_PIECE = 1 << 20  # big frames are read piece by piece: memory grows with bytes received, not promised
 
 
 class Readable(Protocol):
@@ -39,6 +45,13 @@ def decode_header(body: bytes) -> dict[str, str]:
 
 
 def read_exact(stream: Readable, size: int) -> bytes:
+    if size > _PIECE:
+        parts, left = [], size
+        while left:
+            part = read_exact(stream, min(left, _PIECE))
+            parts.append(part)
+            left -= len(part)
+        return b"".join(parts)
     data = stream.read(size)
     if data is None or len(data) < size:
         raise ConnectionClosed
@@ -53,7 +66,34 @@ def read_frame(stream: Readable) -> bytes:
 
 
 def read_header(stream: Readable) -> dict[str, str]:
-    return decode_header(read_frame(stream))
+    (size,) = _LENGTH.unpack(read_exact(stream, 4))
+    if size > MAX_HEADER:
+        raise ConnectionClosed
+    return decode_header(read_exact(stream, size) if size else b"")
+
+
+def read_handshake(sock: socket.socket, timeout: float = HANDSHAKE_TIMEOUT) -> dict[str, str]:
+    """A connection header read straight from the socket within `timeout` seconds overall (a peer that
+    trickles it byte by byte is cut off too); raises ConnectionClosed (or TimeoutError)."""
+    deadline = time.monotonic() + timeout
+
+    def exact(size: int) -> bytes:
+        data = bytearray()
+        while len(data) < size:
+            remaining = deadline - time.monotonic()
+            if remaining <= 0:
+                raise TimeoutError("the connection header took too long")
+            sock.settimeout(remaining)
+            part = sock.recv(min(size - len(data), _PIECE))
+            if not part:
+                raise ConnectionClosed
+            data += part
+        return bytes(data)
+
+    (size,) = _LENGTH.unpack(exact(4))
+    if size > MAX_HEADER:
+        raise ConnectionClosed
+    return decode_header(exact(size) if size else b"")
 
 
 def frame(payload: bytes | memoryview) -> bytes:

@@ -12,11 +12,13 @@ from dataclasses import dataclass, field
 
 from rostool.errors import RostoolError
 from rostool.graph.ros1 import tcpros
-from rostool.graph.ros1.master_client import Unreachable, call
+from rostool.graph.ros1.master_client import RemoteError, Unreachable, call
 from rostool.interfaces.ros1 import Ros1Type
 
 _connection_ids = itertools.count(1)
 SEND_TIMEOUT = 5.0
+RECONNECT_FIRST = 0.1  # seconds before connecting again to a publisher whose link dropped; doubles
+RECONNECT_MAX = 2.0
 
 
 @dataclass
@@ -133,6 +135,8 @@ class InboundLink:
         self.connected = False
         self._sock: socket.socket | None = None
         self._closed = False
+        self._gave_up = False  # the publisher refused us: no retry
+        self._retry = threading.Event()  # set by close(): stop waiting to reconnect
         self._thread = threading.Thread(target=self._run, name=f"tcpros-in {publisher_uri}", daemon=True)
         self._thread.start()
 
@@ -141,29 +145,53 @@ class InboundLink:
         return self.header.get("callerid", self.publisher_uri)
 
     def _run(self) -> None:
+        """Connect and read; when the link drops while the publisher is still listed (a publisher restarted
+        on the same URI, a network hiccup), connect again with backoff, as rospy does, until the
+        subscription closes the link (the master said the publisher left, or we stop)."""
+        backoff = RECONNECT_FIRST
+        try:
+            while not self._closed:
+                if self._serve():
+                    backoff = RECONNECT_FIRST  # it worked for a while: start over quickly next time
+                if self._closed or self._gave_up:
+                    return
+                self._retry.wait(backoff)
+                backoff = min(backoff * 2, RECONNECT_MAX)
+        finally:
+            self.connected = False
+            self.close()
+
+    def _serve(self) -> bool:
+        """One connection's life; whether it got as far as the handshake."""
         sub = self.subscription
         try:
             self._sock = self._connect()
-            stream = self._sock.makefile("rb", buffering=1 << 16)
             self._sock.sendall(tcpros.encode_header(sub.request_header()))
-            self.header = tcpros.read_header(stream)
+            self.header = tcpros.read_handshake(self._sock)
+            self._sock.settimeout(None)
+            stream = self._sock.makefile("rb", buffering=1 << 16)
             if "error" in self.header:
                 error = self.header["error"]
                 sub.report_error(f"publisher {self.publisher_uri} refused {sub.topic}: {error}")
-                return
+                self._gave_up = True
+                return True
             self.connected = True
             callback = sub.callback
             read_frame = tcpros.read_frame
             while not self._closed:
                 callback(read_frame(stream), self)
-        except (tcpros.ConnectionClosed, OSError, Unreachable):
-            pass  # a publisher that died or left: the master's publisherUpdate tidies up, as in rospy
+        except (tcpros.ConnectionClosed, OSError, Unreachable, RemoteError):
+            pass  # the publisher died, left or restarts (not yet publishing): retried until the master
+            # says it is gone
         except RostoolError as err:
             if not self._closed:
                 sub.report_error(str(err))
+            self._gave_up = True
         finally:
+            handshaken = self.connected
             self.connected = False
-            self.close()
+            self._drop_socket()
+        return handshaken
 
     def _connect(self) -> socket.socket:
         protocol = call(
@@ -181,10 +209,15 @@ class InboundLink:
 
     def close(self) -> None:
         self._closed = True
-        if self._sock is not None:
+        self._retry.set()
+        self._drop_socket()
+
+    def _drop_socket(self) -> None:
+        sock = self._sock
+        if sock is not None:
             with contextlib.suppress(OSError):
-                self._sock.shutdown(socket.SHUT_RDWR)
-            self._sock.close()
+                sock.shutdown(socket.SHUT_RDWR)
+            sock.close()
 
 
 class Subscription:
