@@ -22,7 +22,8 @@ from rostool.bag.open import warn
 from rostool.bag.typestores import DEFAULT_DISTRO
 from rostool.errors import RostoolError
 
-TableFormat = Literal["parquet", "csv"]
+TableFormat = Literal["parquet", "csv", "arrow"]  # arrow: pyarrow Tables in memory (ExportResult.tables)
+_COLUMNAR = ("parquet", "arrow")
 EXTRA_HINT = "pip install 'rostool[export]'"
 IMAGE_TYPES = ("sensor_msgs/msg/Image", "sensor_msgs/msg/CompressedImage")
 
@@ -45,6 +46,7 @@ class ExportResult:
     messages: int = 0
     bytes: int = 0
     files: list[str] = field(default_factory=list)
+    tables: dict[str, Any] = field(default_factory=dict)  # topic -> pyarrow.Table, for the "arrow" format
     images: int = 0
 
 
@@ -53,7 +55,7 @@ def require_extras(options: ExportOptions) -> None:
     import importlib
 
     needs = []
-    if options.fmt == "parquet":
+    if options.fmt in _COLUMNAR:
         needs.append(("pyarrow", "--format parquet"))
     if options.images is not None:
         needs += [("numpy", "--images"), ("PIL", "--images")]
@@ -110,7 +112,7 @@ def export_bag(
         images: dict[str, Any] = {}
         skipped: set[str] = set()
         bar = _Bar(sum(conn.msgcount for conn in conns), str(path)) if progress else None
-        raw_tables = options.fmt == "parquet"  # decoded column-wise in batches (columnar.py)
+        raw_tables = options.fmt in _COLUMNAR  # decoded column-wise in batches (columnar.py)
         try:
             chunked = _chunk_plan(reader, conns, options)
             if chunked is not None:
@@ -148,8 +150,12 @@ def export_bag(
                     table.add(msg, timestamp, len(data))
             if options.fmt is not None and options.out is not None:
                 _empty_tables(reader, conns, tables, options, style, partition)
-            for table in tables.values():
-                result.files.append(str(table.close()))
+            for topic, table in tables.items():
+                if isinstance(table.sink, _MemorySink):
+                    table.flush()
+                    result.tables[topic] = table.sink.table()
+                else:
+                    result.files.append(str(table.close()))
             for sink in images.values():
                 result.files.extend(str(p) for p in sink.close())
             if bar is not None:
@@ -171,7 +177,7 @@ def _new_table(reader: Any, conn: Any, options: ExportOptions, style: Any, parti
     plan = TypePlan(reader.resolver.store.fielddefs, style, reader.ros_version)
     columns = plan.columns(conn.msgtype)
     decoder = None
-    if options.fmt == "parquet":
+    if options.fmt in _COLUMNAR:
         from rostool.bag.columnar import ColumnarDecoder
 
         def deserialize(data: bytes, conn: Any = conn) -> object:
@@ -185,7 +191,7 @@ def _new_table(reader: Any, conn: Any, options: ExportOptions, style: Any, parti
 def _chunk_plan(reader: Any, conns: Sequence[Any], options: ExportOptions) -> Any:
     """Where the .mcap chunks of a one-bag Parquet export can be read directly (mcap_batches.py): an
     indexed .mcap (or rosbag2 directory of them, not compressed per message) without images to write."""
-    if options.fmt != "parquet" or options.out is None or options.images is not None or not conns:
+    if options.fmt not in _COLUMNAR or options.out is None or options.images is not None or not conns:
         return None
     if len(reader.inputs) != 1 or reader.inputs[0].storage != "mcap":
         return None
@@ -270,9 +276,12 @@ class _Table:
         self._times: list[int] = []
         self._messages: list[object] = []
         self._bytes = 0
+        self.sink: _ArrowSink | _CsvSink
+        if options.fmt == "arrow":
+            self.sink = _MemorySink(columns)
+            return
         path.parent.mkdir(parents=True, exist_ok=True)
-        sink = _ParquetSink if options.fmt == "parquet" else _CsvSink
-        self.sink: _ParquetSink | _CsvSink = sink(self.partial, columns)
+        self.sink = (_ParquetSink if options.fmt == "parquet" else _CsvSink)(self.partial, columns)
 
     def add(self, msg: object, timestamp: int, size: int) -> None:
         self._times.append(timestamp)
@@ -291,7 +300,7 @@ class _Table:
     def add_batch(self, batch: Any) -> None:
         """A chunk's messages of this topic (mcap_batches.ChannelBatch), written as they come."""
         self.flush()
-        assert self.decoder is not None and isinstance(self.sink, _ParquetSink)
+        assert self.decoder is not None and isinstance(self.sink, _ArrowSink)
         for start in range(0, len(batch.starts), self.batch_rows):
             part = slice(start, start + self.batch_rows)
             arrays = self.decoder.decode_slices(batch.buffer, batch.starts[part], batch.sizes[part])
@@ -301,7 +310,7 @@ class _Table:
         """Raw rows are decoded column-wise; decoded messages give their columns through each attribute once
         per message (columns_from_messages)."""
         if self._raws:
-            assert self.decoder is not None and isinstance(self.sink, _ParquetSink)
+            assert self.decoder is not None and isinstance(self.sink, _ArrowSink)
             self.sink.write_arrays(self._times, self.decoder.decode(self._raws))
         elif self._times:
             self.sink.write([self._times, *columns_from_messages(self.columns[1:], self._messages)])
@@ -320,28 +329,58 @@ class _Table:
             self.partial.unlink(missing_ok=True)
 
 
-class _ParquetSink:
-    def __init__(self, path: Path, columns: list[Column]) -> None:
+class _ArrowSink:
+    """Record batches of the columns' schema, to wherever `write_batch` puts them."""
+
+    def __init__(self, columns: list[Column]) -> None:
         import pyarrow as pa
-        import pyarrow.parquet as pq
 
         self._pa = pa
         self.schema = pa.schema([(column.name, arrow_type(column.spec)) for column in columns])
+
+    def write(self, values: list[list[Any]]) -> None:
+        pa = self._pa
+        arrays = [pa.array(column, type=f.type) for column, f in zip(values, self.schema, strict=True)]
+        self.write_batch(pa.RecordBatch.from_arrays(arrays, schema=self.schema))
+
+    def write_arrays(self, times: Any, arrays: list[Any]) -> None:
+        pa = self._pa
+        columns = [pa.array(times, type=pa.int64()), *arrays]
+        self.write_batch(pa.RecordBatch.from_arrays(columns, schema=self.schema))
+
+    def write_batch(self, batch: Any) -> None:
+        raise NotImplementedError
+
+    def close(self) -> None:
+        pass
+
+
+class _MemorySink(_ArrowSink):
+    def __init__(self, columns: list[Column]) -> None:
+        super().__init__(columns)
+        self._batches: list[Any] = []
+
+    def write_batch(self, batch: Any) -> None:
+        self._batches.append(batch)
+
+    def table(self) -> Any:
+        return self._pa.Table.from_batches(self._batches, schema=self.schema)
+
+
+class _ParquetSink(_ArrowSink):
+    def __init__(self, path: Path, columns: list[Column]) -> None:
+        import pyarrow.parquet as pq
+
+        super().__init__(columns)
+        pa = self._pa
         # dictionaries only where values repeat by nature (strings, bytes): tried on every float column they
         # cost most of the write time and make the file larger
         texts = [f.name for f in self.schema if pa.types.is_string(f.type) or pa.types.is_binary(f.type)]
         self.writer = pq.ParquetWriter(path, self.schema, compression="zstd", use_dictionary=texts)
         self._closed = False
 
-    def write(self, values: list[list[Any]]) -> None:
-        pa = self._pa
-        arrays = [pa.array(column, type=f.type) for column, f in zip(values, self.schema, strict=True)]
-        self.writer.write_batch(pa.RecordBatch.from_arrays(arrays, schema=self.schema))
-
-    def write_arrays(self, times: Any, arrays: list[Any]) -> None:
-        pa = self._pa
-        columns = [pa.array(times, type=pa.int64()), *arrays]
-        self.writer.write_batch(pa.RecordBatch.from_arrays(columns, schema=self.schema))
+    def write_batch(self, batch: Any) -> None:
+        self.writer.write_batch(batch)
 
     def close(self) -> None:
         if not self._closed:

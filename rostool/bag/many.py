@@ -116,7 +116,8 @@ class Failure:
     exit_code: int = 1
 
 
-def _call(func: Callable[[BagItem], T], item: BagItem) -> T | Failure:
+def call(func: Callable[[BagItem], T], item: BagItem) -> T | Failure:
+    """func(item), or the Failure its one-line error describes."""
     try:
         return func(item)
     except RostoolError as err:
@@ -144,7 +145,7 @@ def _worker_call(func: Callable[[BagItem], T], item: BagItem) -> T | Failure:
     global _busy, _interrupted
     _busy, _interrupted = True, False
     try:
-        return _call(func, item)
+        return call(func, item)
     except KeyboardInterrupt:
         return Failure("interrupted", 130)
     finally:
@@ -165,7 +166,7 @@ def run(
     with _Progress(len(items), label, bar) as progress:
         if jobs <= 1 or len(items) <= 1:
             for item in items:
-                result = _call(func, item)
+                result = call(func, item)
                 progress.advance()
                 yield item, result
             return
@@ -238,12 +239,13 @@ def successes(
     label: str = "bags",
     keep_going: bool = False,
     bar: bool = True,
+    runner: Callable[..., Iterator[tuple[BagItem, T | Failure]]] | None = None,
 ) -> Iterator[tuple[BagItem, T]]:
     """`run`, keeping what succeeded. The first failure (in the bags' order) is the command's one-line
     error and ends the other workers; with `keep_going` each failure is one line on stderr as it comes,
     the other bags go on, and a last line ends the command with a non-zero exit."""
     failed = 0
-    results = run(func, items, jobs, label, bar)
+    results = (runner or run)(func, items, jobs, label, bar)  # runner: another engine (ray_engine.runner)
     try:
         for item, result in results:
             if not isinstance(result, Failure):

@@ -29,6 +29,14 @@ from rostool.errors import RostoolError
               help="Write sensor_msgs Image/CompressedImage messages as PNG files here.")  # fmt: skip
 @click.option("--video", is_flag=True, help="With --images: one MP4 (H.264) per image topic instead of PNGs.")
 @click.option("--keep-going", is_flag=True, help="Several bags: skip the ones that fail (a warning each).")
+@click.option(
+    "--engine", type=click.Choice(["local", "ray"]), default="local", show_default=True,
+    help="local: processes on this machine (-j). ray: a Ray task per bag, on a private local Ray started "
+    "for the run, or on the cluster of --ray-address (rostool[ray]).",
+)  # fmt: skip
+@click.option(
+    "--ray-address", metavar="ADDR", help="With --engine ray: the cluster (default: RAY_ADDRESS, else local)."
+)
 @jobs_option
 @distro_option
 def export(
@@ -39,6 +47,8 @@ def export(
     images: str | None,
     video: bool,
     keep_going: bool,
+    engine: str,
+    ray_address: str | None,
     jobs: int | None,
     distro: str,
 ) -> None:
@@ -58,6 +68,7 @@ def export(
       rostool bag export run.bag -o tables/
       rostool bag export rosbag2_dir --format csv --topics /odom,/tf -o csv/
       rostool bag export fleet/ -o dataset/ -j 2
+      rostool bag export fleet/ -o dataset/ --engine ray
       rostool bag export camera.mcap --images frames/ --topics /camera/image_raw
       rostool bag export camera.mcap --images videos/ --video
       duckdb -c "SELECT bag, count(*) FROM read_parquet('dataset/odom/*/*.parquet',
@@ -86,8 +97,15 @@ def export(
     several = len(items) > 1
     total = ExportResult("")
     exported = 0
+    runner = None
+    if engine == "ray":
+        from rostool.bag.ray_engine import runner as ray_runner
+
+        runner = ray_runner(ray_address)
+    elif ray_address:
+        raise RostoolError("--ray-address is for --engine ray")
     for _item, result in successes(
-        partial(_export_one, options, several), items, jobs, "exporting", keep_going
+        partial(_export_one, options, several), items, jobs, "exporting", keep_going, runner=runner
     ):
         exported += 1
         total.messages += result.messages

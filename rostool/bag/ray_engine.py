@@ -1,0 +1,89 @@
+"""Bags on Ray: the same per-bag work as `many.run`, as Ray tasks, on a private local Ray or a cluster.
+
+Without an address (`--ray-address`, else RAY_ADDRESS) a local Ray is started for the run and stopped after
+it: loopback only (Ray 2.60 binds its daemons to every interface unless RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER=0),
+no dashboard, no usage statistics, and token authentication with a token of this run's own, kept in the
+environment (a plain `ray.init()` would write ~/.ray/auth_token, which later clients then trip over). With an
+address, the cluster's own settings hold; rostool must be installed on its nodes. Ray's log lines stay out
+of the user's terminal: failures come back as rostool's one-line errors.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import secrets
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
+from typing import Any, TypeVar
+
+from rostool.bag.many import BagItem, Failure, call
+from rostool.errors import RostoolError
+
+T = TypeVar("T")
+RAY_HINT = "pip install 'rostool[ray]'"
+
+
+@contextmanager
+def session(address: str | None) -> Iterator[Any]:
+    """A connected Ray (the `ray` module): the cluster at `address`, or a private local one for the run."""
+    address = address or os.environ.get("RAY_ADDRESS") or None
+    # before Ray is imported: it reads its settings once
+    os.environ.setdefault("RAY_USAGE_STATS_ENABLED", "0")
+    if not address:
+        os.environ["RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER"] = "0"
+        if "RAY_AUTH_MODE" not in os.environ:
+            os.environ["RAY_AUTH_MODE"] = "token"
+            os.environ["RAY_AUTH_TOKEN"] = secrets.token_hex(32)
+    try:
+        import ray
+    except ImportError as err:
+        raise RostoolError(f"--engine ray needs the ray module: {RAY_HINT}") from err
+    quiet: dict[str, Any] = {"logging_level": logging.ERROR, "log_to_driver": False}
+    try:
+        if address:
+            ray.init(address=address, **quiet)
+        else:
+            ray.init(include_dashboard=False, _node_ip_address="127.0.0.1", **quiet)
+    except Exception as err:  # Ray's own errors: a wrong address, a cluster that does not answer
+        where = f"the Ray cluster at {address}" if address else "a local Ray"
+        raise RostoolError(f"cannot start {where}: {_first_line(err)}") from err
+    try:
+        yield ray
+    finally:
+        ray.shutdown()
+
+
+def runner(address: str | None) -> Callable[..., Iterator[tuple[BagItem, Any]]]:
+    """A `many.run` look-alike whose bags are Ray tasks."""
+
+    def run(
+        func: Callable[[BagItem], T],
+        items: Sequence[BagItem],
+        jobs: int | None,
+        label: str = "",
+        bar: bool = True,
+    ) -> Iterator[tuple[BagItem, T | Failure]]:
+        with session(address) as ray:
+            task = ray.remote(num_cpus=1, max_retries=0)(call)
+            refs = [task.remote(func, item) for item in items]
+            done = 0
+            try:
+                for item, ref in zip(items, refs, strict=True):
+                    try:
+                        result: T | Failure = ray.get(ref)
+                    except ray.exceptions.RayError as err:  # the task's process died, or Ray failed
+                        result = Failure(f"{item.path}: {_first_line(err)}")
+                    done += 1
+                    yield item, result
+            except BaseException:  # Ctrl+C, or a failure that ends the command: the rest is not wanted
+                for ref in refs[done:]:
+                    ray.cancel(ref, force=True)
+                raise
+
+    return run
+
+
+def _first_line(err: BaseException) -> str:
+    text = str(err).strip() or type(err).__name__
+    return text.splitlines()[0]

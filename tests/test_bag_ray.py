@@ -1,0 +1,119 @@
+"""`bag export --engine ray`: the same dataset as the local engine, on a private local Ray and on a Ray
+cluster given by address (a head started here on 127.0.0.1); a bad bag is one line naming it; Ray binds
+loopback only and writes nothing into the user's ~/.ray."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+from collections.abc import Iterator
+from pathlib import Path
+
+import pyarrow.dataset as ds
+import pytest
+
+from tests.support import IN_CI, free_port, rostool, wait_until
+
+# `ray stop --force` ends every Ray on the machine: the Ray tests run one after another, in one worker
+pytestmark = pytest.mark.xdist_group("ray")
+
+TESTDATA = Path(__file__).resolve().parents[2] / "shared" / "testdata"
+RAY = shutil.which("ray", path=str(Path(sys.executable).parent))
+
+
+@pytest.fixture
+def ray_env(tmp_path: Path) -> Iterator[dict[str, str]]:
+    if RAY is None:
+        if IN_CI:
+            pytest.fail("ray is not installed: the test extra brings it")
+        pytest.skip("ray is not installed")
+    env = {k: v for k, v in os.environ.items() if not k.startswith("RAY_")}
+    short = tempfile.mkdtemp(prefix="ray", dir="/tmp")  # Ray's Unix sockets live here: 107 bytes at most
+    env.update(HOME=str(tmp_path / "home"), RAY_USAGE_STATS_ENABLED="0", TMPDIR=short)
+    (tmp_path / "home").mkdir()
+    yield env
+    shutil.rmtree(short, ignore_errors=True)
+
+
+def _fleet(tmp_path: Path) -> Path:
+    fleet = tmp_path / "fleet"
+    fleet.mkdir()
+    for name in ("talker_mcap", "talker_sqlite3", "cdr_test_mcap", "split_mcap"):
+        shutil.copytree(TESTDATA / "ros2" / name, fleet / name)
+    return fleet
+
+
+def _tables(out: Path) -> dict[str, object]:
+    """Each topic's dataset as one table, rows in a fixed order (bag, then t)."""
+    tables = {}
+    for topic in sorted(p for p in out.iterdir() if p.is_dir()):
+        table = ds.dataset(topic, format="parquet", partitioning="hive").to_table()
+        tables[topic.name] = table.sort_by([("bag", "ascending"), ("t", "ascending")])
+    return tables
+
+
+def _ray_listeners() -> list[str]:
+    """Addresses Ray's processes listen on (TCP), from ss."""
+    out = subprocess.run(["ss", "-tlnpH"], capture_output=True, text=True, check=False).stdout
+    return [line.split()[3] for line in out.splitlines() if any(n in line for n in ("raylet", "gcs_server"))]
+
+
+def test_private_local_ray_exports_what_the_local_engine_does(
+    tmp_path: Path, ray_env: dict[str, str]
+) -> None:
+    fleet = _fleet(tmp_path)
+    local = rostool(["bag", "export", str(fleet), "-o", str(tmp_path / "local")], ray_env, timeout=120)
+    assert local.returncode == 0, local.stderr
+    run = rostool(
+        ["bag", "export", str(fleet), "-o", str(tmp_path / "ray"), "--engine", "ray"], ray_env, timeout=180
+    )
+    assert run.returncode == 0, run.stderr
+    # no Ray log line leaks: the one summary line, as the local engine's
+    assert run.stderr.replace("/ray", "/local").strip().splitlines() == local.stderr.strip().splitlines()
+    got, want = _tables(tmp_path / "ray"), _tables(tmp_path / "local")
+    assert got.keys() == want.keys() and got
+    for topic, table in want.items():
+        assert got[topic].equals(table), topic
+    assert not (tmp_path / "home" / ".ray").exists()  # no auth token left in the user's home
+
+
+def test_a_ray_cluster_by_address_and_a_bad_bag(tmp_path: Path, ray_env: dict[str, str]) -> None:
+    fleet = _fleet(tmp_path)
+    (fleet / "broken.mcap").write_bytes(b"\x89MCAP0\r\n" + b"\x00" * 64)
+    port = free_port()
+    head_env = {**ray_env, "RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER": "0", "RAY_AUTH_MODE": "token"}
+    head_env["RAY_AUTH_TOKEN"] = "a" * 64
+    start = [RAY, "start", "--head", "--node-ip-address", "127.0.0.1", "--port", str(port), "--num-cpus", "2"]
+    start += ["--include-dashboard", "false", "--disable-usage-stats"]
+    started = subprocess.run(start, env=head_env, capture_output=True, text=True, timeout=120, check=False)
+    try:
+        assert started.returncode == 0, started.stderr
+        assert wait_until(lambda: bool(_ray_listeners()), 20)
+        loopback = ("127.0.0.1:", "[::ffff:127.0.0.1]:")
+        assert all(a.startswith(loopback) for a in _ray_listeners()), _ray_listeners()
+        client_env = {**head_env, "RAY_ADDRESS": f"127.0.0.1:{port}"}
+        out = tmp_path / "out"
+        failed = rostool(
+            ["bag", "export", str(fleet), "-o", str(out), "--engine", "ray"], client_env, timeout=180
+        )
+        assert failed.returncode != 0
+        assert len(failed.stderr.strip().splitlines()) == 1 and "broken.mcap" in failed.stderr, failed.stderr
+        kept = rostool(
+            ["bag", "export", str(fleet), "-o", str(out), "--engine", "ray", "--keep-going"],
+            client_env,
+            timeout=180,
+        )
+        assert kept.returncode != 0
+        assert "skipped" in kept.stderr and "broken.mcap" in kept.stderr
+        bags = {bag for table in _tables(out).values() for bag in table.column("bag").to_pylist()}
+        assert bags == {
+            "talker_mcap",
+            "talker_sqlite3",
+            "cdr_test_mcap",
+            "split_mcap",
+        }  # each good bag's rows
+    finally:
+        subprocess.run([RAY, "stop", "--force"], env=head_env, capture_output=True, timeout=60, check=False)
