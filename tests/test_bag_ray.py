@@ -4,6 +4,7 @@ loopback only and writes nothing into the user's ~/.ray."""
 
 from __future__ import annotations
 
+import json
 import os
 import shutil
 import subprocess
@@ -117,3 +118,36 @@ def test_a_ray_cluster_by_address_and_a_bad_bag(tmp_path: Path, ray_env: dict[st
         }  # each good bag's rows
     finally:
         subprocess.run([RAY, "stop", "--force"], env=head_env, capture_output=True, timeout=60, check=False)
+
+
+API_SCRIPT = """
+import json, sys
+from rostool.data import read_bag_table, read_bags
+bags = sys.argv[1:]
+table = read_bag_table(bags[0], "/topic")
+ds = read_bags(bags, topics=["/topic"])
+counts = {row["bag"]: row["count()"] for row in ds.groupby("bag").count().take_all()}
+rows = ds.filter(lambda row: row["bag"] == "talker_mcap").take_all()
+print(json.dumps({"table": table.to_pylist(), "columns": ds.columns(), "counts": counts, "rows": rows}))
+"""
+
+
+def test_python_api_tables_and_ray_dataset(tmp_path: Path, ray_env: dict[str, str]) -> None:
+    """read_bag_table gives export's table; read_bags a Ray Dataset of the same rows with bag and topic."""
+    import pyarrow.parquet as pq
+
+    fleet = _fleet(tmp_path)
+    bags = [str(fleet / "talker_mcap"), str(fleet / "talker_sqlite3")]
+    run = subprocess.run(
+        [sys.executable, "-c", API_SCRIPT, *bags], env=ray_env, capture_output=True, text=True, timeout=240
+    )
+    assert run.returncode == 0, run.stderr[-3000:]
+    got = json.loads(run.stdout.strip().splitlines()[-1])
+    exported = rostool(["bag", "export", bags[0], "-o", str(tmp_path / "out")], ray_env, timeout=60)
+    assert exported.returncode == 0, exported.stderr
+    want = pq.read_table(tmp_path / "out" / "topic.parquet").to_pylist()
+    assert got["table"] == want and len(want) == 10
+    assert got["columns"] == ["t", "data", "bag", "topic"]
+    assert got["counts"] == {"talker_mcap": 10, "talker_sqlite3": 10}
+    assert [{k: r[k] for k in ("t", "data")} for r in got["rows"]] == want
+    assert {r["topic"] for r in got["rows"]} == {"/topic"}

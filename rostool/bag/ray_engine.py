@@ -24,9 +24,9 @@ T = TypeVar("T")
 RAY_HINT = "pip install 'rostool[ray]'"
 
 
-@contextmanager
-def session(address: str | None) -> Iterator[Any]:
-    """A connected Ray (the `ray` module): the cluster at `address`, or a private local one for the run."""
+def connect(address: str | None) -> Any:
+    """The `ray` module, connected: to Ray already connected in this process, else to the cluster at
+    `address` (or RAY_ADDRESS), else to a private local Ray started now (see the module's docstring)."""
     address = address or os.environ.get("RAY_ADDRESS") or None
     # before Ray is imported: it reads its settings once
     os.environ.setdefault("RAY_USAGE_STATS_ENABLED", "0")
@@ -38,7 +38,9 @@ def session(address: str | None) -> Iterator[Any]:
     try:
         import ray
     except ImportError as err:
-        raise RostoolError(f"--engine ray needs the ray module: {RAY_HINT}") from err
+        raise RostoolError(f"the ray module is not installed: {RAY_HINT}") from err
+    if ray.is_initialized():
+        return ray
     quiet: dict[str, Any] = {"logging_level": logging.ERROR, "log_to_driver": False}
     try:
         if address:
@@ -48,6 +50,13 @@ def session(address: str | None) -> Iterator[Any]:
     except Exception as err:  # Ray's own errors: a wrong address, a cluster that does not answer
         where = f"the Ray cluster at {address}" if address else "a local Ray"
         raise RostoolError(f"cannot start {where}: {_first_line(err)}") from err
+    return ray
+
+
+@contextmanager
+def session(address: str | None) -> Iterator[Any]:
+    """`connect`, for one command: Ray is shut down (a private one stopped) at the end."""
+    ray = connect(address)
     try:
         yield ray
     finally:
