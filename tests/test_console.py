@@ -120,9 +120,11 @@ while not rospy.is_shutdown():
 
 
 @pytest.fixture
-def rospy_talker(debian_roscore: dict[str, str]) -> Iterator[dict[str, str]]:
-    proc = debian_popen(["python3", "-c", ROSPY_TALKER], debian_roscore)
-    yield debian_roscore
+def rospy_talker(book_master: dict[str, str]) -> Iterator[dict[str, str]]:
+    """A rospy node logging at every level, under Debian's roscore (its rosout node gathers the lines on
+    /rosout_agg) or under `rostool core` (no rosout node: echo reads /rosout)."""
+    proc = debian_popen(["python3", "-c", ROSPY_TALKER], book_master)
+    yield book_master
     stop(proc)
 
 

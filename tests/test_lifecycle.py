@@ -5,15 +5,15 @@ backends, compared byte for byte (stdout, exit status, stderr's own lines) with 
 from __future__ import annotations
 
 import subprocess
-import threading
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
 
+from tests import ros2_peers
 from tests.ros2_backends import Tool, rostool_lines
-from tests.ros2_peers import PEERS_DIR, RclpyPeer, assert_loopback_only, peer_env, peer_python
+from tests.ros2_peers import PEERS_DIR, RclpyPeer, peer_env
 from tests.support import IN_CI
 
 HERE = Path(__file__).resolve().parent
@@ -21,47 +21,19 @@ ROS2CLI_VENV = PEERS_DIR / "jazzy"
 NODE, HIDDEN = "/test_lifecycle_node", "/_hidden_test_lifecycle_node"
 
 
-class ScriptPeer(RclpyPeer):
-    """A peer running another script of tests/ (same venv, same loopback-only environment, same events)."""
-
-    def __init__(
-        self, script: Path, distro: str, env: dict[str, str], tmp_path: Path, args: list[str]
-    ) -> None:
-        self.distro = distro
-        self.events = []
-        self._changed = threading.Condition()
-        self._stderr = []
-        self.proc = subprocess.Popen(
-            [str(peer_python(distro)), str(script), *args],
-            env=peer_env(env, tmp_path),
-            stdout=subprocess.PIPE,
-            stderr=subprocess.PIPE,
-            text=True,
-        )
-        threading.Thread(target=self._read_stdout, daemon=True).start()
-        threading.Thread(target=self._read_stderr, daemon=True).start()
-
-
-StartScript = Callable[..., ScriptPeer]
+StartScript = Callable[..., RclpyPeer]
 
 
 @pytest.fixture
-def start_script(distro: str, graph_env: dict[str, str], tmp_path: Path) -> Iterator[StartScript]:
-    """start_script("lifecycle_peer.py", *args): a peer script of tests/ in the test's graph, ready; stopped
-    at the end, and it must have bound loopback only."""
-    peers: list[ScriptPeer] = []
+def start_script(monkeypatch: pytest.MonkeyPatch, start_peer: Callable[..., RclpyPeer]) -> StartScript:
+    """start_script("lifecycle_peer.py", *args): start_peer's real rclpy node (same venv, loopback-only
+    environment, JSON events, teardown checks), running another peer script of tests/."""
 
-    def start(script: str, *args: str) -> ScriptPeer:
-        peer = ScriptPeer(HERE / script, distro, graph_env, tmp_path, list(args))
-        peers.append(peer)
-        peer.wait_for("ready", timeout=30)
-        return peer
+    def start(script: str, *args: str) -> RclpyPeer:
+        monkeypatch.setattr(ros2_peers, "PEER_SCRIPT", HERE / script)
+        return start_peer(*args)
 
-    yield start
-    for peer in peers:
-        addresses = peer.bound_addresses()
-        peer.stop()
-        assert_loopback_only(addresses)
+    return start
 
 
 Ros2 = Callable[[list[str]], "subprocess.CompletedProcess[str]"]

@@ -57,7 +57,12 @@ class LogEntry:
 
 
 def log_topic(graph: Any) -> str:
-    return "/rosout" if graph.style == "ros2" else "/rosout_agg"
+    """ROS 2 /rosout; ROS 1 /rosout_agg, or /rosout itself where no rosout node gathers it (`rostool
+    core` runs none)."""
+    if graph.style == "ros2":
+        return "/rosout"
+    gathered = any(t.name == "/rosout_agg" and t.publishers for t in graph.topics())
+    return "/rosout_agg" if gathered else "/rosout"
 
 
 def to_entry(message: Any, style: str) -> LogEntry:
