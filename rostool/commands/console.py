@@ -7,6 +7,7 @@ import json
 import threading
 
 import click
+from click.shell_completion import CompletionItem
 
 from rostool.commands._common import json_option, live_graph, print_json
 from rostool.errors import RostoolError
@@ -138,9 +139,13 @@ def get(ctx: click.Context, node: str, logger: str | None) -> None:
     click.echo(levels[logger])
 
 
+def _complete_level(_ctx: click.Context, _param: click.Parameter, incomplete: str) -> list[CompletionItem]:
+    return [CompletionItem(level) for level in con.LEVELS if level.startswith(incomplete.lower())]
+
+
 @console.command("set")
 @click.argument("node", metavar="NODE")
-@click.argument("words", metavar="[LOGGER] LEVEL", nargs=-1, required=True)
+@click.argument("words", metavar="[LOGGER] LEVEL", nargs=-1, required=True, shell_complete=_complete_level)
 @click.pass_context
 def set_level(ctx: click.Context, node: str, words: tuple[str, ...]) -> None:
     """Set the level of one of NODE's loggers (default: the one its own messages use) to LEVEL (debug,

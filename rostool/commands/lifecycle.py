@@ -6,6 +6,7 @@ import sys
 from typing import Any, NoReturn
 
 import click
+from click.shell_completion import CompletionItem
 
 from rostool.commands._common import live_graph
 from rostool.commands.topic import ignored_ros2_options
@@ -127,9 +128,16 @@ def list_transitions(ctx: click.Context, node_name: str, include_hidden: bool, e
         click.echo(f"- {t.label} [{t.id}]\n\tStart: {t.start}\n\tGoal: {t.goal}")
 
 
+def _complete_transition(
+    _ctx: click.Context, _param: click.Parameter, incomplete: str
+) -> list[CompletionItem]:
+    """The transitions a user triggers (the others are the state machine's own)."""
+    return [CompletionItem(label) for label in lc.USER_TRANSITIONS if label.startswith(incomplete)]
+
+
 @lifecycle.command("set")
 @click.argument("node_name", metavar="NODE")
-@click.argument("transition", metavar="TRANSITION")
+@click.argument("transition", metavar="TRANSITION", shell_complete=_complete_transition)
 @hidden_nodes_option
 @ros2cli_options
 @click.pass_context

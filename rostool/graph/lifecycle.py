@@ -19,6 +19,7 @@ from rostool.graph.base import hidden_name
 GET_STATE = "lifecycle_msgs/srv/GetState"
 CHANGE_STATE = "lifecycle_msgs/srv/ChangeState"
 GET_TRANSITIONS = "lifecycle_msgs/srv/GetAvailableTransitions"
+USER_TRANSITIONS = ("configure", "cleanup", "activate", "deactivate", "shutdown")
 # rosbags' type stores hold lifecycle_msgs' messages but no services: their .srv text, for both backends
 SRV_DEFINITIONS = {
     GET_STATE: "---\nState current_state\n",
