@@ -60,7 +60,8 @@ def echo(
     ctx: click.Context, min_level: str, node: str | None, topic: str | None, count: int | None, as_json: bool
 ) -> None:
     """Print nodes' log messages as they are published: time, level, node (ROS 2: logger), message.
-    Levels are coloured on a terminal; --json prints one JSON object a line.
+    Levels are coloured on a terminal; --json prints one JSON object a line. ROS 2 nodes keep their lines
+    of the last 10 s for newcomers, so echo starts with those.
 
     \b
     Examples:
