@@ -11,6 +11,7 @@ import subprocess
 import sys
 import tempfile
 from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import pyarrow.dataset as ds
@@ -18,25 +19,38 @@ import pytest
 
 from tests.support import IN_CI, free_port, rostool, wait_until
 
-# `ray stop --force` ends every Ray on the machine: the Ray tests run one after another, in one worker
+# `ray stop --force` ends every Ray on the machine: the Ray tests (here and in test_bag_s3.py) run one
+# after another, in one worker
 pytestmark = pytest.mark.xdist_group("ray")
 
 TESTDATA = Path(__file__).resolve().parents[2] / "shared" / "testdata"
 RAY = shutil.which("ray", path=str(Path(sys.executable).parent))
 
 
-@pytest.fixture
-def ray_env(tmp_path: Path) -> Iterator[dict[str, str]]:
+@contextmanager
+def ray_env_for(tmp_path: Path) -> Iterator[dict[str, str]]:
+    """An environment for Ray: no RAY_ settings of ours, a home of its own, a short TMPDIR."""
     if RAY is None:
         if IN_CI:
             pytest.fail("ray is not installed: the test extra brings it")
         pytest.skip("ray is not installed")
-    env = {k: v for k, v in os.environ.items() if not k.startswith("RAY_")}
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("RAY_", "AWS_"))}
     short = tempfile.mkdtemp(prefix="ray", dir="/tmp")  # Ray's Unix sockets live here: 107 bytes at most
-    env.update(HOME=str(tmp_path / "home"), RAY_USAGE_STATS_ENABLED="0", TMPDIR=short)
-    (tmp_path / "home").mkdir()
-    yield env
-    shutil.rmtree(short, ignore_errors=True)
+    home = tmp_path / "home"
+    home.mkdir(exist_ok=True)
+    # no AWS access settings (object storage tests give theirs to rostool only), but never the EC2 metadata
+    # address: a credential lookup must not leave loopback
+    env.update(HOME=str(home), RAY_USAGE_STATS_ENABLED="0", TMPDIR=short, AWS_EC2_METADATA_DISABLED="true")
+    try:
+        yield env
+    finally:
+        shutil.rmtree(short, ignore_errors=True)
+
+
+@pytest.fixture
+def ray_env(tmp_path: Path) -> Iterator[dict[str, str]]:
+    with ray_env_for(tmp_path) as env:
+        yield env
 
 
 def _fleet(tmp_path: Path) -> Path:
@@ -81,12 +95,13 @@ def test_private_local_ray_exports_what_the_local_engine_does(
     assert not (tmp_path / "home" / ".ray").exists()  # no auth token left in the user's home
 
 
-def test_a_ray_cluster_by_address_and_a_bad_bag(tmp_path: Path, ray_env: dict[str, str]) -> None:
-    fleet = _fleet(tmp_path)
-    (fleet / "broken.mcap").write_bytes(b"\x89MCAP0\r\n" + b"\x00" * 64)
+@contextmanager
+def ray_head(env: dict[str, str]) -> Iterator[dict[str, str]]:
+    """A Ray head on 127.0.0.1 (its own token), checked to listen on loopback only; the client's env."""
     port = free_port()
-    head_env = {**ray_env, "RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER": "0", "RAY_AUTH_MODE": "token"}
+    head_env = {**env, "RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER": "0", "RAY_AUTH_MODE": "token"}
     head_env["RAY_AUTH_TOKEN"] = "a" * 64
+    assert RAY is not None
     start = [RAY, "start", "--head", "--node-ip-address", "127.0.0.1", "--port", str(port), "--num-cpus", "2"]
     start += ["--include-dashboard", "false", "--disable-usage-stats"]
     started = subprocess.run(start, env=head_env, capture_output=True, text=True, timeout=120, check=False)
@@ -95,7 +110,15 @@ def test_a_ray_cluster_by_address_and_a_bad_bag(tmp_path: Path, ray_env: dict[st
         assert wait_until(lambda: bool(_ray_listeners()), 20)
         loopback = ("127.0.0.1:", "[::ffff:127.0.0.1]:")
         assert all(a.startswith(loopback) for a in _ray_listeners()), _ray_listeners()
-        client_env = {**head_env, "RAY_ADDRESS": f"127.0.0.1:{port}"}
+        yield {**head_env, "RAY_ADDRESS": f"127.0.0.1:{port}"}
+    finally:
+        subprocess.run([RAY, "stop", "--force"], env=head_env, capture_output=True, timeout=60, check=False)
+
+
+def test_a_ray_cluster_by_address_and_a_bad_bag(tmp_path: Path, ray_env: dict[str, str]) -> None:
+    fleet = _fleet(tmp_path)
+    (fleet / "broken.mcap").write_bytes(b"\x89MCAP0\r\n" + b"\x00" * 64)
+    with ray_head(ray_env) as client_env:
         out = tmp_path / "out"
         failed = rostool(
             ["bag", "export", str(fleet), "-o", str(out), "--engine", "ray"], client_env, timeout=180
@@ -116,8 +139,6 @@ def test_a_ray_cluster_by_address_and_a_bad_bag(tmp_path: Path, ray_env: dict[st
             "cdr_test_mcap",
             "split_mcap",
         }  # each good bag's rows
-    finally:
-        subprocess.run([RAY, "stop", "--force"], env=head_env, capture_output=True, timeout=60, check=False)
 
 
 API_SCRIPT = """

@@ -27,7 +27,7 @@ T = TypeVar("T")
 
 @dataclass(frozen=True)
 class BagItem:
-    path: Path
+    path: Path | Any  # a local path, or a remote.RemotePath (object storage: copied locally by `call`)
     name: str  # unique among the bags of one command, safe as a hive partition value
 
 
@@ -56,8 +56,17 @@ def expand(paths: Sequence[str | Path]) -> list[BagItem]:
 
 
 def _expand(paths: Sequence[str | Path]) -> list[BagItem]:
-    found: list[tuple[Path, str]] = []
+    from rostool.bag import remote
+
+    found: list[tuple[Any, str]] = []
     for given in paths:
+        if remote.is_remote(given):
+            base = remote.resolve(str(given))
+            bags = remote.list_bags(base)
+            for bag in bags:
+                relative = bag.path[len(base.path.rstrip("/")) + 1 :] if bag is not base else bag.name
+                found.append((bag, _name(Path(relative or bag.name))))
+            continue
         path = Path(given)
         if not path.exists():
             raise RostoolError(f"{path}: no such file or directory")
@@ -97,7 +106,9 @@ def _name(relative: Path) -> str:
 PARALLEL_FROM_BYTES = 64 * 1024 * 1024
 
 
-def _size(path: Path) -> int:
+def _size(path: Path | Any) -> int:
+    if not isinstance(path, Path):
+        return 0  # in object storage: not worth a listing
     try:
         if path.is_dir():
             return sum(entry.stat().st_size for entry in path.rglob("*") if entry.is_file())
@@ -117,9 +128,18 @@ class Failure:
 
 
 def call(func: Callable[[BagItem], T], item: BagItem) -> T | Failure:
-    """func(item), or the Failure its one-line error describes."""
+    """func(item), or the Failure its one-line error describes. A bag in object storage is first copied into
+    a local temporary directory (removed after), and errors name it by its URI."""
     try:
-        return func(item)
+        if isinstance(item.path, Path):
+            return func(item)
+        from rostool.bag.remote import local_copy
+
+        with local_copy(item.path) as local:
+            try:
+                return func(BagItem(local, item.name))
+            except RostoolError as err:
+                raise RostoolError(str(err).replace(str(local), str(item.path)), err.exit_code) from err
     except RostoolError as err:
         return Failure(str(err), err.exit_code)
 

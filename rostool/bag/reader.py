@@ -56,16 +56,21 @@ class _Part:
 class BagReader(AbstractContextManager["BagReader"]):
     """Opens bags given as paths (or detected inputs); all must be ROS 1 or all ROS 2."""
 
-    def __init__(self, paths: Sequence[str | Path | BagInput], distro: str = DEFAULT_DISTRO) -> None:
+    def __init__(self, paths: Sequence[str | Path | BagInput | Any], distro: str = DEFAULT_DISTRO) -> None:
         if not paths:
             raise RostoolError("no bag given")
-        self.inputs = [p if isinstance(p, BagInput) else detect(p) for p in paths]
+        self._stack = ExitStack()
+        try:
+            self.inputs = [p if isinstance(p, BagInput) else detect(self._local(p)) for p in paths]
+        except BaseException:
+            self._stack.close()
+            raise
         versions = {bag.ros_version for bag in self.inputs}
         if len(versions) > 1:
+            self._stack.close()
             raise RostoolError("cannot read ROS 1 and ROS 2 bags together: convert one side first")
         self.ros_version = versions.pop()
         self.distro = distro
-        self._stack = ExitStack()
         self._parts: list[_Part] = []
         self.connections: list[Connection] = []
         self.topics: dict[str, Topic] = {}
@@ -86,6 +91,14 @@ class BagReader(AbstractContextManager["BagReader"]):
             raise
 
     # -- opening ---------------------------------------------------------------------------------
+    def _local(self, given: Any) -> Any:
+        """A bag in object storage (s3://..., a remote.RemotePath) as a local copy kept while open."""
+        from rostool.bag import remote
+
+        if not remote.is_remote(given):
+            return given
+        return self._stack.enter_context(remote.local_copy(remote.resolve(given)))
+
     def _open(self, bag: BagInput) -> None:
         if bag.kind == "bag":
             from rosbags.rosbag1 import Reader as Reader1

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from functools import partial
 from pathlib import Path
+from typing import Any
 
 import click
 
@@ -69,6 +70,7 @@ def export(
       rostool bag export rosbag2_dir --format csv --topics /odom,/tf -o csv/
       rostool bag export fleet/ -o dataset/ -j 2
       rostool bag export fleet/ -o dataset/ --engine ray
+      rostool bag export s3://fleet/2026-11/ -o s3://analysis/dataset/ --engine ray
       rostool bag export camera.mcap --images frames/ --topics /camera/image_raw
       rostool bag export camera.mcap --images videos/ --video
       duckdb -c "SELECT bag, count(*) FROM read_parquet('dataset/odom/*/*.parquet',
@@ -81,9 +83,12 @@ def export(
         raise RostoolError("say where to write: -o DIR for the tables and/or --images DIR for the images")
     if video and images is None:
         raise RostoolError("--video writes the images of --images DIR as MP4: add --images DIR")
+    from rostool.bag.remote import is_remote, resolve
+
+    remote_out = resolve(output) if output is not None and is_remote(output) else None
     options = ExportOptions(
         fmt=fmt if output is not None else None,  # type: ignore[arg-type]
-        out=Path(output) if output is not None else None,
+        out=Path(output) if output is not None and remote_out is None else None,
         topics=_topic_list(topics),
         images=Path(images) if images is not None else None,
         video=video,
@@ -91,7 +96,9 @@ def export(
     )
     require_extras(options)
     items = expand(bags)
-    for where in (options.out, options.images):
+    if remote_out is not None:
+        options.out = Path("-")  # each bag is written into a local folder of its own, then uploaded
+    for where in (options.out if remote_out is None else None, options.images):
         if where is not None:
             _make_folder(where)
     several = len(items) > 1
@@ -105,25 +112,45 @@ def export(
     elif ray_address:
         raise RostoolError("--ray-address is for --engine ray")
     for _item, result in successes(
-        partial(_export_one, options, several), items, jobs, "exporting", keep_going, runner=runner
+        partial(_export_one, options, several, remote_out),
+        items,
+        jobs,
+        "exporting",
+        keep_going,
+        runner=runner,
     ):
         exported += 1
         total.messages += result.messages
         total.images += result.images
         total.files.extend(result.files)
-    where = " and ".join(str(p) for p in (options.out, options.images) if p is not None)
+    outputs = (remote_out if remote_out is not None else options.out, options.images)
+    where = " and ".join(str(p) for p in outputs if p is not None)
     bags_text = f" from {exported} bags" if several else ""
     pictures = f" ({total.images} images)" if options.images is not None else ""
     click.echo(f"exported {total.messages} messages{bags_text}{pictures} to {where}", err=True)
 
 
-def _export_one(options: ExportOptions, several: bool, item: BagItem) -> ExportResult:
+def _export_one(options: ExportOptions, several: bool, remote_out: Any, item: BagItem) -> ExportResult:
+    """One bag's export; into object storage (`remote_out`): written locally, uploaded when complete."""
     import sys
 
     from rostool.bag.export import export_bag
 
     progress = not several and sys.stderr.isatty()
-    return export_bag(item.path, options, partition=item.name if several else None, progress=progress)
+    partition = item.name if several else None
+    if remote_out is None:
+        return export_bag(item.path, options, partition=partition, progress=progress)
+    import tempfile
+    from dataclasses import replace
+
+    from rostool.bag.remote import upload
+
+    with tempfile.TemporaryDirectory(prefix="rostool-export-") as stage:
+        result = export_bag(
+            item.path, replace(options, out=Path(stage)), partition=partition, progress=progress
+        )
+        result.files = upload(Path(stage), remote_out)
+    return result
 
 
 def _make_folder(path: Path) -> None:
