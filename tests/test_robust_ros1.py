@@ -232,7 +232,10 @@ def test_a_publisher_restarted_on_the_same_uri_is_heard_again(
 
 
 # -- a stopped master ------------------------------------------------------------------------------
-def test_record_ends_on_ctrl_c_with_a_stopped_master(ros_env: dict[str, str], tmp_path: Path) -> None:
+@pytest.mark.parametrize("which", [["/lives"], ["-a"]])
+def test_record_ends_on_ctrl_c_with_a_stopped_master(
+    ros_env: dict[str, str], tmp_path: Path, which: list[str]
+) -> None:
     from tests.support import debian_popen, master_answers
 
     env = {**ros_env, "ROS_VERSION": "1"}
@@ -245,7 +248,7 @@ def test_record_ends_on_ctrl_c_with_a_stopped_master(ros_env: dict[str, str], tm
         publisher = start_rospy_script(FIXED_PUBLISHER, env, tmp_path, "fixed", ["only", "0", "0"])
         wait_published(env, "/lives")
         out = tmp_path / "frozen.bag"
-        recorder = rostool_popen(["bag", "record", "/lives", "-O", str(out)], env)
+        recorder = rostool_popen(["bag", "record", *which, "-O", str(out)], env)
         assert wait_until(lambda: (tmp_path / "frozen.bag.active").exists()
                           and (tmp_path / "frozen.bag.active").stat().st_size > 5000, 20)  # fmt: skip
         master.send_signal(signal.SIGSTOP)

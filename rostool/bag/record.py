@@ -442,6 +442,9 @@ class Recorder:
         self._opened = threading.Event()
         self._open_error: RostoolError | None = None
         self._written_in_file = 0
+        self._subscribing = threading.Lock()  # subscribing vs closing the source
+        self._closing = False
+        self._discover_error: RostoolError | None = None
 
     # -- files -----------------------------------------------------------------------------------
     def _open_next(self) -> Sink:
@@ -486,10 +489,23 @@ class Recorder:
         return any(p.fullmatch(topic) for p in self.patterns)
 
     def _subscribe(self, topic: str) -> None:
-        if topic in self._subscribed:
-            return
-        self._subscribed.add(topic)
-        self.source.subscribe(topic, self.queue.put)
+        with self._subscribing:
+            if topic in self._subscribed or self._closing:
+                return
+            self._subscribed.add(topic)
+            self.source.subscribe(topic, self.queue.put)
+
+    def _discover_loop(self, stop: threading.Event) -> None:
+        """-a/-e/--node: ask the master for topics every POLL_INTERVAL, on a thread of its own, so a master
+        that hangs (stopped, overloaded) never holds up Ctrl+C."""
+        while not stop.is_set() and not self._closing:
+            try:
+                self._discover()
+            except RostoolError as err:
+                self._discover_error = err
+                stop.set()
+                return
+            stop.wait(POLL_INTERVAL)
 
     def _follow_clock(self) -> None:
         """--use-sim-time: stamp messages with the latest /clock (rosgraph_msgs/msg/Clock, CDR)."""
@@ -622,17 +638,16 @@ class Recorder:
                     if self.exclude is None or not self.exclude.fullmatch(name):
                         self._subscribe(name)
             started = time.monotonic()
-            next_poll = started
+            if options.all_topics or options.regex or options.node or options.wanted:
+                threading.Thread(
+                    target=self._discover_loop, args=(stop,), name="bag-discover", daemon=True
+                ).start()
             while not stop.is_set():
                 now = time.monotonic()
                 if self._failure is not None or self._limit_reached.is_set() or not writer.is_alive():
                     break
                 if options.duration is not None and not options.split and now - started >= options.duration:
                     break
-                discovering = options.all_topics or options.regex or options.node or options.wanted
-                if discovering and now >= next_poll:
-                    self._discover()
-                    next_poll = now + POLL_INTERVAL
                 if report is not None:
                     report(self.status())
                 wait = POLL_INTERVAL
@@ -641,10 +656,15 @@ class Recorder:
                 stop.wait(wait)
         finally:
             self.queue.accepting = False
+            self._closing = True  # the discovery thread subscribes to nothing more
+            if self._subscribing.acquire(timeout=0.5):  # unless a hung master holds it mid-subscribe
+                self._subscribing.release()
             self.source.close()  # unregister now; nothing more arrives
             self._finishing.set()
             self.queue.ready.set()
             writer.join()
+        if self._discover_error is not None:
+            raise self._discover_error
         self.result.dropped = dict(self.queue.dropped)
         if self._failure is not None:
             self.result.error = self._failure
