@@ -3,7 +3,10 @@ format (.mcap/.db3 share one connection per topic; .bag keeps one per publisher,
 
 from __future__ import annotations
 
+from collections import Counter
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -58,3 +61,23 @@ def test_every_publisher_of_a_topic_is_recorded(
     strings = _strings(out)
     for name in NAMES:
         assert [s for s in strings if s.startswith(f"{name}:")] == [f"{name}:{i}" for i in range(EACH)]
+
+
+@pytest.mark.parametrize("fmt", ["mcap", "db3"])
+def test_every_rclpy_publisher_of_a_topic_is_recorded(
+    start_peer: Callable[..., Any], graph_env: dict[str, str], tmp_path: Path, fmt: str
+) -> None:
+    """Two real rclpy talkers on one topic: both bursts are in the ROS 2 bag, each 'hello N' twice."""
+    out = tmp_path / f"two.{fmt}"
+    recorder = rostool_popen(
+        ["bag", "record", "--topics", "/two", "-O", str(out), "--duration", "8"], graph_env
+    )
+    talkers = ["--talk", "/two", "--count", "30", "--depth", "100", "--subs", "1"]
+    peers = [start_peer("--name", name, *talkers) for name in ("first", "second")]
+    for peer in peers:  # each burst starts once the recorder's subscription matched it
+        peer.wait_for("sent", timeout=30)
+    _out, err = recorder.communicate(timeout=60)
+    assert recorder.returncode == 0, err
+    assert "cannot write" not in err, err
+    counts = Counter(_strings(out))
+    assert len(counts) == 30 and set(counts.values()) == {2}, counts
