@@ -4,6 +4,7 @@ backends, compared byte for byte (stdout, exit status, stderr's own lines) with 
 
 from __future__ import annotations
 
+import os
 import subprocess
 import time
 from collections.abc import Callable, Iterator
@@ -13,7 +14,7 @@ import pytest
 
 from tests import ros2_peers
 from tests.ros2_backends import Tool, rostool_lines
-from tests.ros2_peers import PEERS_DIR, RclpyPeer, peer_env
+from tests.ros2_peers import PEERS_DIR, RclpyPeer, assert_loopback_only, bound_addresses, peer_env
 from tests.support import IN_CI
 
 HERE = Path(__file__).resolve().parent
@@ -59,7 +60,22 @@ def ros2(graph_env: dict[str, str], tmp_path: Path) -> Iterator[Ros2]:
 
     run(["daemon", "start"])
     yield run
+    daemons = [
+        pid for pid in os.listdir("/proc") if pid.isdigit() and _is_daemon_of(pid, env["ROS_DOMAIN_ID"])
+    ]
+    addresses = [address for pid in daemons for address in bound_addresses(int(pid))]
     run(["daemon", "stop"])
+    assert daemons, "the real ros2 daemon was not running"
+    assert_loopback_only(addresses)
+
+
+def _is_daemon_of(pid: str, domain: str) -> bool:
+    try:
+        words = Path(f"/proc/{pid}/cmdline").read_bytes().split(b"\0")
+    except OSError:  # gone meanwhile
+        return False
+    flag = b"--ros-domain-id"
+    return b"ros2-daemon" in words and flag in words[:-1] and words[words.index(flag) + 1] == domain.encode()
 
 
 def ros2_sees(ros2: Ros2, nodes: list[str]) -> None:
