@@ -116,12 +116,20 @@ def test_listings_through_the_daemon_equal_direct_ones(
     running = json.loads(tool(["daemon", "status", "--json"]).stdout)
     assert running["running"] is True and running["backend"] == backend
     assert running["domain"] == int(graph_env["ROS_DOMAIN_ID"])
+
+    seen: list[str] = []
+
+    def no_direct_tool_left() -> bool:  # the direct calls' own nodes leave as their processes end
+        seen[:] = tool(["node", "list"]).stdout.split()
+        return not any(n.startswith("/rostool_") for n in seen)
+
     for args in LISTINGS:
+        assert wait_until(no_direct_tool_left, timeout=15), (args, seen)
         served = tool(args)
         assert served.returncode == 0 and served.stderr_lines == [], (args, served.stderr)  # type: ignore[attr-defined]
         # a direct rclpy listing may answer before discovery is complete (the daemon's is): a few tries
         direct = [tool([*args, "--no-daemon"]) for _ in range(1)]
-        while direct[-1].stdout != served.stdout and len(direct) < 4:
+        while direct[-1].stdout != served.stdout and len(direct) < 8:
             direct.append(tool([*args, "--no-daemon"]))
         assert direct[-1].returncode == 0, (args, direct[-1].stderr)
         assert served.stdout == direct[-1].stdout, args

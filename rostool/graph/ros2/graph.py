@@ -11,6 +11,7 @@ rostool does not know asks the publisher's node for it (type_description.py).
 
 from __future__ import annotations
 
+import contextlib
 import os
 import sys
 import threading
@@ -151,7 +152,23 @@ class Session:
         endpoint.__del__()  # cyclonedds deletes an entity only this way (or with its participant)
 
     def close(self) -> None:
+        """Leave the graph at once: first say on ros_discovery_info that this participant has no node left
+        (rmw's graph caches drop the node on that sample, as when a node is destroyed, where the
+        participant's disposal alone may only be noticed when its lease expires), then delete it."""
+        from cyclonedds._clayer import ddspy_write  # type: ignore[import-not-found]
+
+        with self._lock:
+            payload = encode_entities_info(self.participant.guid, [], gid_size(self.types.distro))
+            with contextlib.suppress(Exception):
+                ddspy_write(self._info_writer._ref, payload)
+                self._info_writer.wait_for_acks(dds_duration_ms(200))
         self.participant.close()
+
+
+def dds_duration_ms(milliseconds: int) -> int:
+    from cyclonedds.util import duration
+
+    return int(duration(milliseconds=milliseconds))
 
 
 class Ros2Graph(Ros2Verbs):
