@@ -8,6 +8,7 @@ import shutil
 import socket
 import subprocess
 import sys
+import threading
 import time
 import xmlrpc.client
 from collections.abc import Callable, Sequence
@@ -231,6 +232,64 @@ def stop(proc: subprocess.Popen[str], timeout: float = 5.0) -> tuple[str, str]:
         except subprocess.TimeoutExpired:
             proc.kill()
     return proc.communicate()
+
+
+class Watched:
+    """A running process whose output is collected as it comes, so a test waits for the lines it needs
+    instead of sleeping: `watched = Watched(rostool_popen(...)); watched.wait_for(lambda out: ...)`."""
+
+    def __init__(self, proc: subprocess.Popen[str]) -> None:
+        self.proc = proc
+        self._out: list[str] = []
+        self._err: list[str] = []
+        self._changed = threading.Condition()
+        self._readers = [
+            threading.Thread(target=self._read, args=(proc.stdout, self._out), daemon=True),
+            threading.Thread(target=self._read, args=(proc.stderr, self._err), daemon=True),
+        ]
+        for reader in self._readers:
+            reader.start()
+
+    def _read(self, stream: object, into: list[str]) -> None:
+        for line in stream or ():  # type: ignore[attr-defined]
+            with self._changed:
+                into.append(line)
+                self._changed.notify_all()
+        with self._changed:
+            self._changed.notify_all()
+
+    @property
+    def stdout(self) -> str:
+        with self._changed:
+            return "".join(self._out)
+
+    def wait_for(self, done: Callable[[str], bool], timeout: float = 20.0) -> bool:
+        """Wait until `done(stdout so far)` holds (True), the process exits or `timeout` passes (False:
+        the caller's assertion on the output then says what was missing)."""
+        deadline = time.monotonic() + timeout
+        with self._changed:
+            while not done("".join(self._out)):
+                left = deadline - time.monotonic()
+                if left <= 0 or (
+                    self.proc.poll() is not None and not any(r.is_alive() for r in self._readers)
+                ):
+                    return done("".join(self._out))
+                self._changed.wait(min(left, 0.2))
+        return True
+
+    def stop(self, timeout: float = 5.0) -> tuple[str, str]:
+        """Interrupt it like Ctrl+C would (killed after `timeout`), then its whole stdout and stderr."""
+        if self.proc.poll() is None:
+            self.proc.send_signal(2)
+            try:
+                self.proc.wait(timeout=timeout)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait()
+        for reader in self._readers:
+            reader.join(timeout=5)
+        with self._changed:
+            return "".join(self._out), "".join(self._err)
 
 
 # --- custom interfaces (.msg/.srv/.action) for Debian's peers: a source tree plus genpy classes ---------

@@ -18,7 +18,7 @@ from typing import Any
 import pytest
 
 from tests.ros2_peers import RclpyPeer
-from tests.support import rostool, rostool_popen, stop
+from tests.support import Watched, rostool, rostool_popen, stop, wait_until
 
 Start = Callable[..., RclpyPeer]
 
@@ -209,7 +209,7 @@ def test_topic_pub_forms(graph_env: dict[str, str], fixture_graph: dict[str, Rcl
                           "{data: foo}"], env)  # fmt: skip
     try:
         heard = [listener.wait_for("heard", lambda e: e["data"] == "foo", timeout=15) for _ in range(1)]
-        time.sleep(2.5)
+        wait_until(lambda: len([e for e in listener.of("heard") if e["data"] == "foo"]) >= 2, timeout=15)
     finally:
         out, _err = stop(proc)
     lines = out.splitlines()
@@ -220,10 +220,10 @@ def test_topic_pub_forms(graph_env: dict[str, str], fixture_graph: dict[str, Rcl
     c.check("test_topic_pub_once", once.returncode == 0 and once.stdout.splitlines()[:3] == [
         "publisher: beginning loop", "publishing #1: std_msgs.msg.String(data='bar')", ""]
         and listener.wait_for("heard", lambda e: e["data"] == "bar") is not None, once)  # fmt: skip
-    proc = rostool_popen(["--ros2", "topic", "pub", "-p", "2", "--keep-alive", "3", *qos, "/chit_chatter",
-                          "std_msgs/msg/String", "{data: fizz}"], env)  # fmt: skip
-    time.sleep(6.0)
-    out, _err = stop(proc)
+    every_two = Watched(rostool_popen(["--ros2", "topic", "pub", "-p", "2", "--keep-alive", "3", *qos,
+                                       "/chit_chatter", "std_msgs/msg/String", "{data: fizz}"], env))  # fmt: skip
+    every_two.wait_for(lambda out: re.search(r"publishing #4: .*\n\n", out) is not None, timeout=30)
+    out, _err = every_two.stop()
     c.check("test_topic_pub_print_every_two", out.splitlines()[:5] == [
         "publisher: beginning loop", "publishing #2: std_msgs.msg.String(data='fizz')", "",
         "publishing #4: std_msgs.msg.String(data='fizz')", ""], out)  # fmt: skip

@@ -21,7 +21,7 @@ from typing import Any
 import pytest
 
 from tests.ros2_peers import PEERS_DIR, RclpyPeer, peer_python
-from tests.support import rostool, rostool_popen, stop
+from tests.support import Watched, rostool, rostool_popen
 from tests.test_ros2cli_forms import Cases, Start
 
 PARAMETER_SERVICES = 6
@@ -120,14 +120,14 @@ def test_service_cases(distro: str, service_env: dict[str, str], echo_servers: l
     )
     c.check("test_call", got.returncode == 0 and got.stdout.splitlines() == expected, got)
     values = "{bool_value: true, int32_value: 1, float64_value: 1.0, string_value: foobar}"
-    proc = rostool_popen(
-        ["--ros2", "service", "call", "-r", "1", "/my_ns/echo", "test_msgs/srv/BasicTypes", values], env
-    )
-    time.sleep(8.0)
-    out, _err = stop(proc)
     expected = echo_call_output(
         distro, bool_value=True, int32_value=1, float64_value=1.0, string_value="foobar"
     )
+    repeated = Watched(rostool_popen(
+        ["--ros2", "service", "call", "-r", "1", "/my_ns/echo", "test_msgs/srv/BasicTypes", values], env
+    ))  # fmt: skip
+    repeated.wait_for(lambda out: len(out.splitlines()) >= 2 * len(expected), timeout=30)
+    out, _err = repeated.stop()
     c.check("test_repeated_call", out.splitlines()[: 2 * len(expected)] == 2 * expected, out)
     out = ros2(env, "service", "info", "/my_ns/echo").stdout
     c.check(
