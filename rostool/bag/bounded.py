@@ -124,12 +124,19 @@ def _install_rosbag1() -> None:
         if compression == "none":
             decompressor: Callable[[bytes], bytes] = bytes
         elif compression in _DECODERS:
-            decompressor = functools.partial(inflate, compression, declared=declared)
+            decompressor = functools.partial(_inflate_in, str(self.path), compression, declared)
         else:
             raise rosbag1.ReaderError(f"Compression {compression!r} is not supported.")
         return rosbag1.Chunk(datasize, datapos, decompressor)
 
     rosbag1.Reader.read_chunk = read_chunk
+
+
+def _inflate_in(path: str, kind: str, declared: int, data: bytes) -> bytes:
+    try:
+        return inflate(kind, data, declared)
+    except Inflates as err:
+        raise Inflates(f"{path}: {err}") from err
 
 
 def _install_rosbags_mcap() -> None:
