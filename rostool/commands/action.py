@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import re
 import sys
+import threading
 from typing import Any
 
 import click
@@ -227,10 +228,11 @@ def _split_goal_args(values: tuple[str, ...]) -> tuple[str | None, tuple[str, ..
 
 @action.command("send-goal", context_settings={"ignore_unknown_options": True})
 @click.argument("name", metavar="ACTION")
-@click.argument("values", nargs=-1, required=True, metavar="[TYPE] GOAL...")
+@click.argument("values", nargs=-1, metavar="[TYPE] GOAL...")
 @click.option(
     "-f", "--feedback", "show_feedback", is_flag=True, help="Print each feedback message as it arrives."
 )
+@click.option("--stdin", "from_stdin", is_flag=True, help="Read the goal (YAML) from standard input.")
 @click.option(
     "--timeout",
     type=click.FloatRange(min=0, min_open=True),
@@ -245,6 +247,7 @@ def send_goal(
     name: str,
     values: tuple[str, ...],
     show_feedback: bool,
+    from_stdin: bool,
     timeout: float | None,
     interface_paths: tuple[str, ...],
     as_json: bool,
@@ -263,6 +266,10 @@ def send_goal(
     """
     from rostool.interfaces.values import message_args
 
+    if from_stdin:
+        values = (*values, sys.stdin.read())
+    if not values:
+        raise click.UsageError("Missing argument '[TYPE] GOAL...' (or give the goal on stdin with --stdin).")
     type_name, goal_values = _split_goal_args(values)
     goal = message_args(goal_values)
     with live_graph(ctx, interface_paths) as graph:
@@ -317,7 +324,18 @@ class _Renderer:
 class _Ros2Renderer(_Renderer):
     """ros2 action send_goal's text, or one JSON object per event."""
 
+    def __init__(self, as_json: bool, show_feedback: bool) -> None:
+        super().__init__(as_json, show_feedback)
+        # a feedback can overtake the server's answer to the goal; ros2 prints the answer first
+        self.accepted = False
+        self.early: list[Any] = []
+        self._lock = threading.RLock()
+
     def sent(self, goal_id: str, goal: Any = None, accepted: bool = True) -> None:
+        with self._lock:
+            self._sent(goal_id, goal, accepted)
+
+    def _sent(self, goal_id: str, goal: Any, accepted: bool) -> None:
         from rostool.output.plain import to_plain
         from rostool.output.yaml_text import to_yaml
 
@@ -330,6 +348,10 @@ class _Ros2Renderer(_Renderer):
             answer = f"Goal accepted with ID: {goal_id}\n" if accepted else "Goal was rejected."
             click.echo(f"Sending goal:\n     {to_yaml(goal, 'ros2')}\n\n{answer}")
         sys.stdout.flush()
+        self.accepted = True
+        for early in self.early:
+            self._event(early)
+        self.early.clear()
 
     waited = False
 
@@ -346,10 +368,17 @@ class _Ros2Renderer(_Renderer):
         sys.stdout.flush()
 
     def event(self, event: Any) -> None:
+        with self._lock:
+            self._event(event)
+
+    def _event(self, event: Any) -> None:
         from rostool.output.plain import to_plain
         from rostool.output.yaml_text import to_yaml
 
         if event.kind == "feedback" and not self.show_feedback:
+            return
+        if not self.accepted:
+            self.early.append(event)
             return
         if self.as_json:
             body: dict[str, Any] = {"event": event.kind}

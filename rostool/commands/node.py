@@ -187,7 +187,8 @@ def _info_ros2(details: NodeInfo, as_json: bool, include_hidden: bool = False) -
     lines = [details.name]
     for title, entries in groups:
         lines.append(f"  {title}:")
-        lines += [f"    {n}: {t}" for n, t in entries]
+        # ros2 prints an empty section as its title and an empty line
+        lines += [f"    {n}: {t}" for n, t in entries] or [""]
     click.echo("\n".join(lines))
 
 

@@ -175,19 +175,20 @@ def _ros2_only_args(graph: Any, extra: str | None, usage: str) -> None:
         raise RostoolError(f"too many arguments for a ROS 1 parameter ({usage} is the ROS 2 form)")
 
 
-# rclpy prints integer and double arrays as array.array, byte arrays as a list of bytes
-_RCLPY_ARRAYS: dict[str, Callable[[Any], str]] = {
-    "Integer values are": lambda v: f"array('q', {v})",
-    "Double values are": lambda v: f"array('d', {[float(x) for x in v]})",
-    "Byte values are": lambda v: repr([bytes([x]) if isinstance(x, int) else x for x in v]),
+# Jazzy's ros2 param get prints integer and double arrays as lists (numpy's tolist()), byte arrays as
+# rclpy's list of single bytes (a byte may arrive signed)
+_ROS2_ARRAYS: dict[str, Callable[[Any], str]] = {
+    "Integer values are": lambda v: repr([int(x) for x in v]),
+    "Double values are": lambda v: repr([float(x) for x in v]),
+    "Byte values are": lambda v: repr([bytes([x & 0xFF]) if isinstance(x, int) else bytes(x) for x in v]),
 }
 
 
 def _get_text(value: Any, text: str, hide_type: bool) -> str:
-    """ros2 param get's line (`Integer values are: array('q', [1, 2])`), or only the value (--hide-type)."""
+    """ros2 param get's line (`Integer values are: [1, 2]`), or only the value (--hide-type)."""
     label, sep, shown = text.partition(": ")
-    if sep and label in _RCLPY_ARRAYS:
-        shown = _RCLPY_ARRAYS[label](value)
+    if sep and label in _ROS2_ARRAYS:
+        shown = _ROS2_ARRAYS[label](value)
     if not sep:
         return "None" if hide_type else text
     return shown if hide_type else f"{label}: {shown}"

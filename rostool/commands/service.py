@@ -3,6 +3,7 @@ list, type, info, find and call in ros2 service's forms and output)."""
 
 from __future__ import annotations
 
+import sys
 import time
 from typing import Any
 
@@ -314,6 +315,7 @@ def echo(ctx: click.Context, name: str, **options: Any) -> None:
 )
 @click.option("-r", "--rate", type=click.FloatRange(min=0, min_open=True), metavar="HZ",
               help="ROS 2: call again at HZ until Ctrl+C (as ros2 service call -r).")  # fmt: skip
+@click.option("--stdin", "from_stdin", is_flag=True, help="Read the request (YAML) from standard input.")
 @interfaces_option
 @json_option
 @ignored_ros2_options("no_daemon", "spin_time", "use_sim_time")
@@ -325,6 +327,7 @@ def call(
     wait: bool,
     timeout: float | None,
     rate: float | None,
+    from_stdin: bool,
     interface_paths: tuple[str, ...],
     as_json: bool,
 ) -> None:
@@ -347,6 +350,8 @@ def call(
     from rostool.output.plain import to_plain
     from rostool.output.yaml_text import to_yaml
 
+    if from_stdin:
+        values = (*values, sys.stdin.read())
     with live_graph(ctx, interface_paths) as graph:
         if rate is not None and graph.style == "ros1":
             raise RostoolError("service call -r applies to ROS 2 graphs only (ros2 service call's form)")

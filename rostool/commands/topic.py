@@ -149,7 +149,7 @@ def list_topics(
 @click.argument("name")
 @click.option("-v", "--verbose", is_flag=True, help="ROS 2: every endpoint with its node, GID and QoS.")
 @json_option
-@ignored_ros2_options("no_daemon", "spin_time")
+@ignored_ros2_options("no_daemon", "spin_time", "use_sim_time")
 @click.pass_context
 def info(ctx: click.Context, name: str, verbose: bool, as_json: bool) -> None:
     """Show a topic's type, publishers and subscribers.
@@ -192,16 +192,18 @@ def _info_ros2(graph: Any, found: Any, verbose: bool, as_json: bool) -> None:
     if as_json:
         print_json({**vars(found), "endpoints": endpoints})
         return
-    lines = [f"Type: {found.type}"]
+    # ros2 prints each item (the type, a count, an endpoint's block) on its line(s), with -v each followed
+    # by an empty line
+    items = [f"Type: {found.type}"]
     for title, kind in (("Publisher", "PUBLISHER"), ("Subscription", "SUBSCRIPTION")):
         rows = [e for e in endpoints if e["endpoint_type"] == kind]
-        lines += ["", f"{title} count: {len(rows)}"] if verbose else [f"{title} count: {len(rows)}"]
+        items.append(f"{title} count: {len(rows)}")
         for row in rows if verbose else []:
             namespace, _, node = row["node"].rpartition("/")
             qos = row["qos"]
             depth = {None: "UNKNOWN", 0: "KEEP_ALL"}.get(qos["depth"], f"KEEP_LAST ({qos['depth']})")
-            lines += [
-                "", f"Node name: {node}", f"Node namespace: {namespace or '/'}", f"Topic type: {row['type']}",
+            lines = [
+                f"Node name: {node}", f"Node namespace: {namespace or '/'}", f"Topic type: {row['type']}",
                 f"Topic type hash: {row['type_hash'] or 'UNKNOWN'}", f"Endpoint type: {kind}",
                 f"GID: {row['gid']}", "QoS profile:", f"  Reliability: {str(qos['reliability']).upper()}",
                 f"  History (Depth): {depth}", f"  Durability: {str(qos['durability']).upper()}",
@@ -211,9 +213,8 @@ def _info_ros2(graph: Any, found: Any, verbose: bool, as_json: bool) -> None:
                 f"  Liveliness: {str(qos.get('liveliness', 'automatic')).upper()}",
                 f"  Liveliness lease duration: {qos.get('liveliness_lease_duration', 'Infinite')}",
             ]  # fmt: skip
-        if verbose:
-            lines.append("")
-    click.echo("\n".join(lines))
+            items.append("\n".join(lines))
+    click.echo("".join(f"{item}\n\n" for item in items) if verbose else "\n".join(items), nl=not verbose)
 
 
 def _node_uri(graph: Any, node: str) -> str:
@@ -826,11 +827,13 @@ def _publish_ros2(
     message = graph.build_message(type_name, raw)
     publisher = graph.publisher(name, type_name, latch=False)
     if wait_matching:
-        click.echo(f"Waiting for at least {wait_matching} matching subscription(s)...")
         deadline = None if max_wait is None else time.monotonic() + max_wait
-        while not publisher.wait_for_subscribers(wait_matching, 0.5):
+        wait = 0.0
+        while not publisher.wait_for_subscribers(wait_matching, wait):  # ros2's line, once a second
             if deadline is not None and time.monotonic() >= deadline:
                 raise RostoolError(f"timed out waiting for {wait_matching} matching subscription(s)")
+            click.echo(f"Waiting for at least {wait_matching} matching subscription(s)...")
+            wait = 1.0
     elif total is not None:
         # a volatile subscriber gets nothing published before it matched: wait for the ones discovery shows
         try:

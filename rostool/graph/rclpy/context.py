@@ -1,8 +1,9 @@
 """One rclpy context with one node, `/rostool_<pid>`, and an executor spinning it in its own thread.
 
 The context is rostool's own (not rclpy's default) and installs no signal handlers, so Ctrl+C stays
-Python's KeyboardInterrupt and the verbs end as with the DDS backend. The node starts neither parameter
-services nor /rosout: it should add as little as possible to the graph it looks at.
+Python's KeyboardInterrupt and the verbs end as with the DDS backend. The node starts no parameter
+services, no type description service and no /rosout: it should add as little as possible to the graph it
+looks at.
 """
 
 from __future__ import annotations
@@ -26,9 +27,14 @@ class RclpyContext:
         self.context = Context()
         try:
             rclpy.init(args=[], context=self.context, signal_handler_options=SignalHandlerOptions.NO)
+            from rclpy.parameter import Parameter
+
+            # no get_type_description service either: it would show in `ros2 service list` as ours
+            quiet = [Parameter("start_type_description_service", Parameter.Type.BOOL, False)]
             self.node: Any = rclpy.create_node(
-                node_name, context=self.context, start_parameter_services=False, enable_rosout=False
-            )
+                node_name, context=self.context, start_parameter_services=False, enable_rosout=False,
+                parameter_overrides=quiet,
+            )  # fmt: skip
         except Exception as err:  # rclpy's RCLError / RMWError: the RMW or its configuration failed
             with contextlib.suppress(Exception):
                 self.context.try_shutdown()

@@ -47,6 +47,8 @@ def type_of(value: Any) -> int:
     if isinstance(value, str):
         return STRING
     if isinstance(value, list) and value:
+        if all(isinstance(v, bytes) and len(v) == 1 for v in value):  # a dump's `!!binary` items
+            return BYTE_ARRAY
         if all(isinstance(v, bool) for v in value):
             return BOOL_ARRAY
         if all(isinstance(v, int) and not isinstance(v, bool) for v in value):
@@ -71,6 +73,8 @@ def typed_fields(kind: int, value: Any) -> dict[str, Any]:
     if kind == NOT_SET:
         return {"type": NOT_SET}
     item = [float(v) for v in value] if kind == DOUBLE_ARRAY else value
+    if kind == BYTE_ARRAY:
+        item = [v[0] if isinstance(v, bytes) else v for v in value]
     return {"type": kind, _FIELDS[kind]: item}
 
 
@@ -193,8 +197,16 @@ def dump_document(client: ParameterClient) -> dict[str, Any]:
     """Every parameter of the node as `ros2 param dump` lays it out."""
     names = client.names()
     values = client.values(names) if names else []
-    flat = {name: to_python(value) for name, value in zip(names, values, strict=True)}
+    flat = {name: _file_value(value) for name, value in zip(names, values, strict=True)}
     return {client.node: {SECTION: nest(flat)}}
+
+
+def _file_value(value: Any) -> Any:
+    """A value as ros2 param dump writes it: a byte array as rclpy's single bytes (YAML `!!binary`)."""
+    plain = to_python(value)
+    if int(value.type) == BYTE_ARRAY:
+        return [bytes([b & 0xFF]) if isinstance(b, int) else bytes(b) for b in plain]
+    return plain
 
 
 def nest(flat: dict[str, Any]) -> dict[str, Any]:

@@ -1,0 +1,237 @@
+"""The real `ros2` (ros2cli Jazzy, installed by test.sh beside the Jazzy peers) as referee: a graph of real
+rclpy nodes shared by a test module, and one case run as `ros2 ARGS` and `rostool --ros2 --ros2-backend B
+ARGS` for B in dds and rclpy, each result recorded for docs/ros2cli-parity.md (tests/parity_table.py).
+
+ros2 runs as a user's would: with its daemon (started and warmed up once per module, stopped at its end),
+the loopback-only Fast DDS profile and the module's ROS_DOMAIN_ID. Verbs that list the graph run one after
+another (each tool is a node that the others would see); the others run side by side.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import re
+import subprocess
+import sys
+import time
+from collections.abc import Callable, Iterator
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import pytest
+
+from tests.ros2_backends import rostool_lines
+from tests.ros2_peers import PEERS_DIR, RclpyPeer, assert_loopback_only, peer_env, rclpy_command
+from tests.support import IN_CI, ros2_env, wait_until
+
+DISTRO = "jazzy"  # the distro of the referee's source
+ROS2 = PEERS_DIR / DISTRO / "bin" / "ros2"
+RESULTS = Path(
+    os.environ.get("ROSTOOL_PARITY_RESULTS") or Path(__file__).parent.parent / "docs" / "ros2cli-parity.json"
+)
+BACKENDS = ("dds", "rclpy")
+
+Normalize = Callable[[str], str]
+
+
+def same_text(text: str) -> str:
+    return text
+
+
+def digits_zeroed(text: str) -> str:
+    """Counters in the data, stamps and rates: every number's digits as 0."""
+    return re.sub(r"\d+", "0", text)
+
+
+def sorted_lines(text: str) -> str:
+    """Line order where ros2 defines none (the ament index's file order)."""
+    return "".join(sorted(text.splitlines(keepends=True)))
+
+
+def without_observers(text: str) -> str:
+    """The graph without the tools under test: a rostool run on the rclpy backend is a node (/rostool_PID)
+    that ros2's daemon may still list for a moment after it ended."""
+    return "".join(line for line in text.splitlines(keepends=True) if not _OBSERVER.search(line))
+
+
+_OBSERVER = re.compile(r"\brostool_\d+\b")
+
+
+def service_wait(text: str) -> str:
+    """ros2 service call's waiting line, printed only when its new node has not yet discovered the server."""
+    return text.replace("waiting for service to become available...\n", "")
+
+
+def subscription_wait(text: str) -> str:
+    """ros2 topic pub's waiting lines, one a second until discovery matched a subscription."""
+    return "".join(
+        line for line in text.splitlines(keepends=True) if not line.startswith("Waiting for at least")
+    )
+
+
+def goal_ids(text: str) -> str:
+    return re.sub(r"ID: [0-9a-f]{32}", "ID: <uuid>", text)
+
+
+def gids(text: str) -> str:
+    return re.sub(r"GID: [0-9a-f.]+", "GID: <gid>", text)
+
+
+@dataclass(frozen=True)
+class Case:
+    """One command line, both tools. `graph`: it lists the graph (run one tool at a time); `error`: ros2
+    fails on it (same exit status, one line on rostool's stderr)."""
+
+    verb: str
+    flags: str
+    args: tuple[str, ...]
+    normalize: Normalize = same_text
+    graph: bool = False
+    error: bool = False
+    timeout: float = 30.0
+    name: str = ""  # how the results name it, when its arguments hold a temporary path
+
+    @property
+    def id(self) -> str:
+        return self.name or " ".join(self.args)
+
+
+@dataclass
+class Run:
+    code: int | None
+    stdout: str
+    stderr: str
+
+    @property
+    def stderr_lines(self) -> list[str]:
+        return rostool_lines(self.stderr)
+
+
+@dataclass
+class Outcome:
+    case: Case
+    ros2: Run
+    tools: dict[str, Run] = field(default_factory=dict)
+
+
+def require_ros2cli() -> None:
+    if not ROS2.exists():
+        message = f"the real ros2 (ros2cli Jazzy) is missing at {ROS2}: run ./test.sh"
+        if IN_CI:
+            pytest.fail(message)
+        pytest.skip(message)
+
+
+def _run(command: list[str], env: dict[str, str], timeout: float) -> Run:
+    try:
+        done = subprocess.run(command, env=env, capture_output=True, text=True, timeout=timeout)
+    except subprocess.TimeoutExpired as err:
+        out = err.stdout.decode() if isinstance(err.stdout, bytes) else err.stdout or ""
+        return Run(None, out, "timed out")
+    return Run(done.returncode, done.stdout, done.stderr)
+
+
+class ParityGraph:
+    """The module's real nodes and the three ways of asking them."""
+
+    def __init__(self, tmp: Path, peers: list[list[str]]) -> None:
+        self.env = ros2_env()
+        self.tmp = tmp
+        self.peer_env = peer_env(self.env, tmp)
+        venv = str(PEERS_DIR / DISTRO)
+        self.ros2_env = dict(
+            self.peer_env, AMENT_PREFIX_PATH=venv, PATH=f"{venv}/bin:{self.peer_env['PATH']}"
+        )
+        self.peers = [RclpyPeer(DISTRO, self.env, tmp, args) for args in peers]
+        self.outcomes: list[Outcome] = []
+
+    def ros2(self, args: list[str], timeout: float = 30) -> Run:
+        return _run([str(ROS2), *args], self.ros2_env, timeout)
+
+    def rostool(self, backend: str, args: list[str], timeout: float = 30) -> Run:
+        if backend == "rclpy":
+            return _run(rclpy_command(["--ros2", *args], DISTRO), self.peer_env, timeout)
+        return _run([sys.executable, "-m", "rostool", "--ros2", *args], self.env, timeout)
+
+    def compare(self, case: Case) -> Outcome:
+        # the rclpy backend before the DDS one: its node has left ros2's view by the next case
+        order = ("rclpy", "dds")
+        jobs: list[Callable[[], Run]] = [lambda: self.ros2(list(case.args), case.timeout)]
+        jobs += [lambda b=b: self.rostool(b, list(case.args), case.timeout) for b in order]
+        if case.graph:
+            runs = [job() for job in jobs]
+        else:
+            with ThreadPoolExecutor(len(jobs)) as pool:
+                runs = list(pool.map(lambda job: job(), jobs))
+        outcome = Outcome(case, runs[0], dict(zip(order, runs[1:], strict=True)))
+        self.outcomes.append(outcome)
+        return outcome
+
+    def warm_up(self, ready: Callable[[ParityGraph], bool]) -> None:
+        """Start ros2's daemon and wait until it has seen the whole graph (a fresh daemon answers with what
+        it has discovered so far)."""
+        for peer in self.peers:
+            peer.wait_for("ready", timeout=30)
+        self.ros2(["daemon", "start"])
+        assert wait_until(lambda: ready(self), timeout=30, interval=0.2), "ros2's daemon never saw the graph"
+
+    def close(self) -> None:
+        self.ros2(["daemon", "stop"])
+        for peer in self.peers:
+            addresses = peer.bound_addresses()
+            peer.stop()
+            assert_loopback_only(addresses)
+
+
+@contextlib.contextmanager
+def parity_graph(
+    tmp: Path, peers: list[list[str]], ready: Callable[[ParityGraph], bool]
+) -> Iterator[ParityGraph]:
+    """A module's graph: its peers up and ros2's daemon warmed up; at the end, the daemon stopped, the peers
+    checked for loopback-only sockets, and the judged cases recorded."""
+    require_ros2cli()
+    graph = ParityGraph(tmp, peers)
+    try:
+        graph.warm_up(ready)
+        yield graph
+    finally:
+        graph.close()
+        record()
+
+
+# --- results ------------------------------------------------------------------------------------------
+SAME, DIFFERS, MISSING, ONLY_ROSTOOL = "same", "differs", "missing in rostool", "only in rostool"
+
+
+def record() -> None:
+    """Merge the judged cases into RESULTS (keyed by command line and backend)."""
+    if not RESULT_ROWS:
+        return
+    existing: dict[str, dict[str, str]] = {}
+    if RESULTS.exists():
+        existing = {f"{r['args']}|{r['backend']}": r for r in json.loads(RESULTS.read_text())["results"]}
+    existing.update({f"{args}|{backend}": row for (args, backend), row in RESULT_ROWS.items()})
+    RESULTS.parent.mkdir(parents=True, exist_ok=True)
+    rows = sorted(existing.values(), key=lambda r: (r["verb"], r["flags"], r["args"], r["backend"]))
+    RESULTS.write_text(json.dumps({"referee": f"ros2cli {DISTRO}", "results": rows}, indent=1) + "\n")
+
+
+RESULT_ROWS: dict[tuple[str, str], dict[str, str]] = {}
+
+
+def judge(case: Case, backend: str, result: str, why: str = "") -> None:
+    RESULT_ROWS[(case.id, backend)] = {
+        "verb": case.verb, "flags": case.flags, "args": case.id, "backend": backend, "result": result,
+        "why": why,
+    }  # fmt: skip
+
+
+def wait_ros2(graph: ParityGraph, args: list[str], expected: str, timeout: float = 20) -> bool:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if expected in graph.ros2(args).stdout:
+            return True
+    return False
