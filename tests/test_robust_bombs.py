@@ -204,3 +204,25 @@ def test_yaml_alias_bomb_in_metadata_is_refused(tmp_path: Path) -> None:
     assert result.returncode == 0 and result.stderr.count("\n") == 1, result.stderr
     assert "anchors/aliases" in result.stderr and "warning" in result.stderr
     assert re.search(r"^Messages:\s+20$", result.stdout, re.M), result.stdout
+
+
+def test_fuzz_findings_of_issue_27(tmp_path: Path) -> None:
+    """bench/fuzz_robust.py's findings: a chunk declaring 0 bytes uncompressed (bag info divided by it),
+    a record length of 4 GiB in the file header (bag reindex allocated it)."""
+    import struct
+
+    bz2_bag = tmp_path / "zero.bag"
+    data = bytearray((TESTDATA / "ros1" / "example-bz2.bag").read_bytes())
+    at = data.index(b"size=", 4096) + 5
+    struct.pack_into("<I", data, at, 0)
+    bz2_bag.write_bytes(bytes(data))
+    info = rostool(["bag", "info", str(bz2_bag)], dict(os.environ))
+    assert info.returncode == 0 and "Traceback" not in info.stderr, info.stderr
+    assert re.search(r"^compressed:.*n/a", info.stdout, re.M), info.stdout
+    huge = tmp_path / "huge.bag"
+    data = bytearray((TESTDATA / "ros1" / "no-messages.bag").read_bytes())
+    struct.pack_into("<I", data, 13, 0xFFFFFFFF)
+    huge.write_bytes(bytes(data))
+    result, rss = peak_rss(["bag", "reindex", str(huge)])
+    _one_line(result)
+    assert "claims 4294967295 bytes" in result.stderr and rss < RSS_LIMIT_KB

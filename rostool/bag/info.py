@@ -450,6 +450,11 @@ def _ros2_frequencies(bag: BagInput, info: BagInfo) -> None:
 
 
 # -- rendering -----------------------------------------------------------------------------------
+def _percent(part: int, whole: int) -> str:
+    """rosbag's compression ratio; a damaged chunk header may declare 0 bytes uncompressed."""
+    return f"{100.0 * part / whole:.2f}%" if whole else "n/a"
+
+
 def _size(size: float) -> str:
     for suffix in ("KB", "MB", "GB", "TB", "PB", "EB", "ZB", "YB"):
         size /= 1024.0
@@ -525,7 +530,7 @@ def format_rosbag(info: BagInfo) -> str:
             rate = max(len(raw_r), len(packed_r))
             rows.append(("uncompressed", f"{raw_s:>{width}} @ {raw_r:>{rate}}/s"))
             rows.append(
-                ("compressed", f"{packed_s:>{width}} @ {packed_r:>{rate}}/s ({100.0 * packed / raw:.2f}%)")
+                ("compressed", f"{packed_s:>{width}} @ {packed_r:>{rate}}/s ({_percent(packed, raw)})")
             )
         else:
             rows += [("uncompressed", f"{raw_s:>{width}}"), ("compressed", f"{packed_s:>{width}}")]

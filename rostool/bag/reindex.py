@@ -142,8 +142,8 @@ def _reindex_ros1(path: Path, tmp: Path) -> tuple[int, int, bool]:
                 data_len = size - handle.tell()  # a recorder killed mid-chunk leaves the size at 0
                 data = handle.read(data_len)
                 complete = False
-            else:
-                data = handle.read(data_len)
+            else:  # never more than the file holds: a damaged length may claim gigabytes
+                data = handle.read(min(data_len, size - handle.tell()))
                 complete = len(data) == data_len
             if op == fmt.OP_CHUNK:
                 chunk = _recover_chunk(fields, data, complete, connections)

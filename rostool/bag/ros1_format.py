@@ -8,6 +8,7 @@ written here with struct only, so `bag info` on a .bag imports nothing heavy.
 
 from __future__ import annotations
 
+import os
 import struct
 from dataclasses import dataclass, field
 from typing import BinaryIO
@@ -100,12 +101,23 @@ def get_op(fields: dict[str, bytes]) -> int:
     return op[0]
 
 
+def _check_left(handle: BinaryIO, length: int) -> None:
+    """A length past the end of the file is damage: say so before allocating gigabytes for it."""
+    try:
+        left = os.fstat(handle.fileno()).st_size - handle.tell()
+    except (OSError, AttributeError, ValueError):  # not a real file: the short read says it
+        return
+    if length > left:
+        raise FormatError(f"a record claims {length} bytes where the file has {max(left, 0)} left")
+
+
 def read_record(handle: BinaryIO, with_data: bool = True) -> tuple[dict[str, bytes], bytes, int]:
     """(header fields, data, data length) of the record at the current position."""
     raw = handle.read(4)
     if len(raw) < 4:
         raise FormatError("unexpected end of file")
     (length,) = _U32.unpack(raw)
+    _check_left(handle, length)
     header = handle.read(length)
     if len(header) < length:
         raise FormatError("unexpected end of file in a record header")
@@ -114,6 +126,7 @@ def read_record(handle: BinaryIO, with_data: bool = True) -> tuple[dict[str, byt
         raise FormatError("unexpected end of file")
     (data_length,) = _U32.unpack(raw)
     if with_data:
+        _check_left(handle, data_length)
         data = handle.read(data_length)
         if len(data) < data_length:
             raise FormatError("unexpected end of file in record data")
