@@ -12,6 +12,8 @@ from rostool.reference.model import Reference
 # The command tree the project plans (issue tracker); groups land one by one. None: a leaf verb.
 PLANNED_TREE: Mapping[str, frozenset[str] | None] = {
     "core": None,
+    "console": frozenset({"echo", "list", "get", "set"}),
+    "lifecycle": frozenset({"nodes", "get", "list", "set"}),
     "node": frozenset({"list", "info", "ping", "kill"}),
     "topic": frozenset({"list", "info", "type", "find", "echo", "hz", "bw", "delay", "pub"}),
     "param": frozenset({"list", "get", "set", "describe", "delete", "dump", "load"}),
