@@ -16,7 +16,7 @@ from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any, Literal
 
 from rostool.errors import RostoolError
-from rostool.graph.base import NodeInfo, Received, Subscription, TopicInfo
+from rostool.graph.base import NodeInfo, Received, Subscription, TopicInfo, hidden_name
 from rostool.graph.rclpy import types as rtypes
 from rostool.graph.rclpy.recording import BagVerbs
 from rostool.graph.rclpy.refusals import Refusals
@@ -140,11 +140,12 @@ class RclpyGraph(ServiceVerbs, ParameterVerbs, ActionVerbs, BagVerbs, Refusals):
         changed = started
         while True:
             now = time.monotonic()
-            named = bool(last[0])
-            found = named or bool({name for name, _types in last[1]} - baseline)
+            found = bool(last[0]) or bool({name for name, _types in last[1]} - baseline)
             if until is not None and until():
                 return True
-            # endpoints may come before their node's name (rmw learns names from ros_discovery_info)
+            # endpoints may come before their node's name (rmw learns names from ros_discovery_info), and a
+            # hidden node alone (a graph daemon's, ros2cli's) is often found before the others
+            named = any(not hidden_name(self._full_name(n, ns)) for n, ns in last[0])
             quiet = named and now - changed >= GRAPH_QUIET_SECONDS
             if found and (self._settled or quiet or now - started >= SETTLE_MAX_SECONDS):
                 self._settled = True
