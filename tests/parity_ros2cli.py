@@ -93,6 +93,7 @@ class Case:
     error: bool = False
     timeout: float = 30.0
     name: str = ""  # how the results name it, when its arguments hold a temporary path
+    stdin: str | None = None
 
     @property
     def id(self) -> str:
@@ -125,9 +126,9 @@ def require_ros2cli() -> None:
         pytest.skip(message)
 
 
-def _run(command: list[str], env: dict[str, str], timeout: float) -> Run:
+def _run(command: list[str], env: dict[str, str], timeout: float, stdin: str | None = None) -> Run:
     try:
-        done = subprocess.run(command, env=env, capture_output=True, text=True, timeout=timeout)
+        done = subprocess.run(command, env=env, capture_output=True, text=True, timeout=timeout, input=stdin)
     except subprocess.TimeoutExpired as err:
         out = err.stdout.decode() if isinstance(err.stdout, bytes) else err.stdout or ""
         return Run(None, out, "timed out")
@@ -148,19 +149,26 @@ class ParityGraph:
         self.peers = [RclpyPeer(DISTRO, self.env, tmp, args) for args in peers]
         self.outcomes: list[Outcome] = []
 
-    def ros2(self, args: list[str], timeout: float = 30) -> Run:
-        return _run([str(ROS2), *args], self.ros2_env, timeout)
+    def ros2(self, args: list[str], timeout: float = 30, stdin: str | None = None) -> Run:
+        return _run(self.ros2_command(args), self.ros2_env, timeout, stdin)
 
-    def rostool(self, backend: str, args: list[str], timeout: float = 30) -> Run:
+    def ros2_command(self, args: list[str]) -> list[str]:
+        return [str(ROS2), *args]
+
+    def rostool(self, backend: str, args: list[str], timeout: float = 30, stdin: str | None = None) -> Run:
+        command, env = self.rostool_command(backend, args)
+        return _run(command, env, timeout, stdin)
+
+    def rostool_command(self, backend: str, args: list[str]) -> tuple[list[str], dict[str, str]]:
         if backend == "rclpy":
-            return _run(rclpy_command(["--ros2", *args], DISTRO), self.peer_env, timeout)
-        return _run([sys.executable, "-m", "rostool", "--ros2", *args], self.env, timeout)
+            return rclpy_command(["--ros2", *args], DISTRO), self.peer_env
+        return [sys.executable, "-m", "rostool", "--ros2", *args], self.env
 
     def compare(self, case: Case) -> Outcome:
         # the rclpy backend before the DDS one: its node has left ros2's view by the next case
         order = ("rclpy", "dds")
-        jobs: list[Callable[[], Run]] = [lambda: self.ros2(list(case.args), case.timeout)]
-        jobs += [lambda b=b: self.rostool(b, list(case.args), case.timeout) for b in order]
+        jobs: list[Callable[[], Run]] = [lambda: self.ros2(list(case.args), case.timeout, case.stdin)]
+        jobs += [lambda b=b: self.rostool(b, list(case.args), case.timeout, case.stdin) for b in order]
         if case.graph:
             runs = [job() for job in jobs]
         else:

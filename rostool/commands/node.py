@@ -83,6 +83,12 @@ def list_nodes(ctx: click.Context, show_all: bool, count_nodes: bool, as_json: b
     if as_json:
         print_json(names)
         return
+    if ros2 and len(set(names)) < len(names):
+        click.echo(
+            "WARNING: Be aware that there are nodes in the graph that share an exact name, which can have "
+            "unintended side effects.",
+            err=True,
+        )
     for name in names:
         click.echo(f"{uris[name]} \t{name}" if name in uris else name)
 
@@ -112,6 +118,13 @@ def info(ctx: click.Context, name: str, include_hidden: bool, as_json: bool) -> 
                 details = graph.node_info(name)
             except RostoolError as err:
                 raise RostoolError(f"Unable to find node '{resolved}'") from err
+            twins = graph.node_names().count(resolved)
+            if twins > 1:  # ros2 node info's warning
+                click.echo(
+                    f'There are {twins} nodes in the graph with the exact name "{resolved}". '
+                    "You are seeing information about only one of them.",
+                    err=True,
+                )
             _info_ros2(details, as_json, include_hidden)
             return
         details = graph.node_info(name)

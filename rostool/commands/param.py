@@ -56,7 +56,8 @@ def _find_node(graph: Any, node: str, include_hidden: bool, timeout: float) -> s
 
 
 def _ros2_nodes(graph: Any, include_hidden: bool) -> list[str]:
-    return [n for n in graph.node_names() if include_hidden or not hidden_name(n)]
+    """Each node name once (nodes may share a name; their parameter services are the same names)."""
+    return [n for n in dict.fromkeys(graph.node_names()) if include_hidden or not hidden_name(n)]
 
 
 @click.group()
