@@ -9,6 +9,10 @@ every ROS 2 test. It takes roles from its arguments and reports what it sees as 
     {"event": "param", "name": N, "value": V}            --params: each accepted parameter change
     {"event": "graph", ...}                              --watch: this node's view of the graph
     {"event": "published", "count": N, "t": T}           --talk: about once a second (monotonic time)
+    {"event": "stamped", "count": N, "t": T}             --stamped: about once a second
+    {"event": "matched", "topic": T, "subscribers": N, "count": N, "t": T, "progress": KIND}
+                                                         --talk, --stamped: its subscriber count changed
+                                                         (count: published so far, as KIND events count)
     {"event": "sent", "count": N, "seconds": S}          --talk with --count: after the burst
     {"event": "counted", "count": N, "first": T, "last": T}  --raw-count: every 0.5 s
     (no events)                                          --repeat TYPE=TOPIC: default TYPE messages at 1 Hz
@@ -84,6 +88,9 @@ class Peer(Node):
         super().__init__(args.name, namespace=args.namespace)
         self.count = 0
         self.reported = time.monotonic()
+        self.subscribers: dict[object, int] = {}
+        self.rate = args.rate
+        self.stamped_reported = time.monotonic()
         if args.talk:
             from std_msgs.msg import String
 
@@ -188,10 +195,28 @@ class Peer(Node):
         message.twist.linear.x = 1.0
         self.cmd_vel.publish(message)
 
+    def report_matched(self, publisher: object, count: int, progress: str) -> None:
+        """A "matched" event when the publisher's subscriber count changed: tests wait on it for a
+        recorder or an echo to be listening, instead of sleeping."""
+        subscribers = publisher.get_subscription_count()  # type: ignore[attr-defined]
+        if subscribers != self.subscribers.get(publisher, 0):
+            self.subscribers[publisher] = subscribers
+            topic = publisher.topic_name  # type: ignore[attr-defined]
+            emit(
+                "matched",
+                topic=topic,
+                subscribers=subscribers,
+                count=count,
+                t=time.monotonic(),
+                progress=progress,
+            )
+
     def tick(self) -> None:
         self.count += 1
         self.message.data = f"hello {self.count}"
         self.publisher.publish(self.message)
+        if self.count % 20 == 1 or self.rate <= 50:  # at most ~50 checks a second, even at 1 kHz
+            self.report_matched(self.publisher, self.count, "published")
         now = time.monotonic()
         if now - self.reported >= 1.0:
             self.reported = now
@@ -227,6 +252,12 @@ class Peer(Node):
         self.point.header.stamp = self.get_clock().now().to_msg()
         self.point.point.x += 1.0
         self.stamped.publish(self.point)
+        count = int(self.point.point.x)
+        self.report_matched(self.stamped, count, "stamped")
+        now = time.monotonic()
+        if now - self.stamped_reported >= 1.0:
+            self.stamped_reported = now
+            emit("stamped", count=count, t=now)
 
     def on_params(self, parameters: list) -> None:
         for parameter in parameters:

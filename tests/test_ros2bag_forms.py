@@ -141,10 +141,18 @@ def test_record_refuses_an_existing_output_folder(tmp_path: Path) -> None:
 
 
 # -- record and play against real rclpy peers ----------------------------------------------------
-def _record(args: list[str], env: dict[str, str], cwd: Path, seconds: float) -> str:
+def _record(args: list[str], env: dict[str, str], cwd: Path, talkers: list[Any], messages: int) -> str:
+    """Record until every talker (an RclpyPeer with --talk or --stamped) has seen the recorder subscribe
+    and has published `messages` more since; then Ctrl+C. Returns the recorder's stderr."""
+    started = time.monotonic()
     proc = rostool_popen(["--ros2", "bag", "record", *args], env, cwd=cwd)
-    time.sleep(seconds)
-    _out, err = stop(proc)
+    try:
+        for talker in talkers:
+            matched = talker.wait_for("matched", lambda e: e["subscribers"] > 0 and e["t"] > started, 60)
+            more = lambda e, m=matched: e["count"] >= m["count"] + messages  # noqa: E731
+            talker.wait_for(matched["progress"], more, 60)
+    finally:
+        _out, err = stop(proc)
     assert proc.returncode == 0, err
     return err
 
@@ -155,8 +163,8 @@ def test_record_writes_a_rosbag2_directory_named_by_o(
     """ros2bag test_record.py: `record -a -s STORAGE --output DIR` exits 0 on SIGINT; the directory is
     exactly DIR and rosbags reads it. (Its "Listening for topics..."/"Recording..." lines are printed on a
     terminal only: piped, stderr holds one summary line, as the other recorders' tests require.)"""
-    start_peer("--talk", "/chatter", "--rate", "20")
-    stderr = _record(["-a", "-s", "sqlite3", "--output", "out"], graph_env, tmp_path, 4.0)
+    talker = start_peer("--talk", "/chatter", "--rate", "20")
+    stderr = _record(["-a", "-s", "sqlite3", "--output", "out"], graph_env, tmp_path, [talker], 50)
     assert stderr.startswith("recorded ") and stderr.count("\n") == 1, stderr
     bag = tmp_path / "out"
     assert sorted(p.name for p in bag.iterdir()) == ["metadata.yaml", "out_0.db3"]
@@ -180,11 +188,10 @@ def test_record_splits_by_duration_and_compresses(
     start_peer: Peer, graph_env: dict[str, str], tmp_path: Path
 ) -> None:
     """-d splits into NAME_0.mcap, NAME_1.mcap, ...; --compression-mode message with zstd; --topics a b."""
-    start_peer("--talk", "/chatter", "--rate", "20")
+    talker = start_peer("--talk", "/chatter", "--rate", "20")
     args = ["--topics", "/chatter", "/absent", "-o", "split", "-d", "1"]
-    _record(
-        [*args, "--compression-mode", "message", "--compression-format", "zstd"], graph_env, tmp_path, 5.0
-    )
+    compressed = ["--compression-mode", "message", "--compression-format", "zstd"]
+    _record([*args, *compressed], graph_env, tmp_path, [talker], 70)
     bag = tmp_path / "split"
     files = sorted(p.name for p in bag.glob("*.mcap"))
     assert len(files) >= 2 and files[0] == "split_0.mcap"
@@ -243,9 +250,10 @@ def test_record_split_by_size_keeps_max_bag_files_compressed(
     start_peer: Peer, graph_env: dict[str, str], tmp_path: Path
 ) -> None:
     """-b BYTES --max-bag-files N --compression-mode file: N zstd files remain, listed in metadata.yaml."""
-    start_peer("--talk", "/chatter", "--rate", "50")
+    talker = start_peer("--talk", "/chatter", "--rate", "50")
     args = ["--topics", "/chatter", "-s", "sqlite3", "-o", "ring", "-b", "600", "--max-bag-files", "2"]
-    _record([*args, "--compression-mode", "file", "--compression-format", "zstd"], graph_env, tmp_path, 4.0)
+    compressed = ["--compression-mode", "file", "--compression-format", "zstd"]
+    _record([*args, *compressed], graph_env, tmp_path, [talker], 130)
     bag = tmp_path / "ring"
     files = sorted(p.name for p in bag.iterdir() if p.name != "metadata.yaml")
     assert len(files) == 2 and all(f.startswith("ring_") and f.endswith(".db3.zstd") for f in files), files
@@ -259,14 +267,14 @@ def test_record_use_sim_time_stamps_with_clock(
     start_peer: Peer, graph_env: dict[str, str], tmp_path: Path
 ) -> None:
     """--use-sim-time: the stored receive times are /clock's (here 1000 s), not the wall clock."""
-    start_peer("--talk", "/chatter", "--rate", "20")
+    talker = start_peer("--talk", "/chatter", "--rate", "20")
     clock = rostool_popen(
         ["topic", "pub", "/clock", "rosgraph_msgs/msg/Clock", "{clock: {sec: 1000}}", "-r", "20"], graph_env
     )
     try:
         listed = lambda: "/clock" in rostool(["topic", "list"], graph_env).stdout.split()  # noqa: E731
         assert wait_until(listed, timeout=20)
-        _record(["--topics", "/chatter", "--use-sim-time", "-o", "sim"], graph_env, tmp_path, 5.0)
+        _record(["--topics", "/chatter", "--use-sim-time", "-o", "sim"], graph_env, tmp_path, [talker], 60)
     finally:
         stop(clock)
     from rosbags.highlevel import AnyReader
@@ -305,8 +313,8 @@ def test_record_filters_types_exclusions_regex_and_custom_data(
 ) -> None:
     """ros2bag test_recorder_args_parser's lists, recorded for real: --topic-types T, --custom-data K=V K=V,
     -a --exclude-topics T, -e RE (a name containing RE)."""
-    start_peer("--talk", "/chatter", "--rate", "20")
-    start_peer("--stamped", "/point", "--rate", "20")
+    talker = start_peer("--talk", "/chatter", "--rate", "20")
+    stamped = start_peer("--stamped", "/point", "--rate", "20")
     typed = [
         "--topic-types",
         "std_msgs/msg/String",
@@ -316,9 +324,9 @@ def test_record_filters_types_exclusions_regex_and_custom_data(
         "-o",
         "typed",
     ]
-    _record(typed, graph_env, tmp_path, 3.0)
-    _record(["-a", "--exclude-topics", "/chatter", "-o", "excluded"], graph_env, tmp_path, 3.0)
-    _record(["-e", "oin", "-o", "regex"], graph_env, tmp_path, 3.0)
+    _record(typed, graph_env, tmp_path, [talker], 30)
+    _record(["-a", "--exclude-topics", "/chatter", "-o", "excluded"], graph_env, tmp_path, [stamped], 30)
+    _record(["-e", "oin", "-o", "regex"], graph_env, tmp_path, [stamped], 30)
     assert set(read_rosbags(tmp_path / "typed")) == {"/chatter"}
     meta = yaml.safe_load((tmp_path / "typed" / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
     assert meta["custom_data"] == {"Key1": "Value1", "key2": "value2"}
