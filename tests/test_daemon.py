@@ -152,6 +152,21 @@ def test_joins_and_clean_leaves_show_at_once(
 
 
 @pytest.mark.parametrize("distro", ["jazzy"])
+def test_a_peer_killed_with_sigkill_leaves_at_its_lease_expiry(
+    start_peer: Callable[..., RclpyPeer], graph_env: dict[str, str]
+) -> None:
+    start_peer("--name", "steady")
+    doomed = start_peer("--name", "doomed", "--talk", "/doomed_topic")
+    started(graph_env)
+    assert names(rostool(["node", "list"], graph_env)) == ["/doomed", "/steady"]
+    doomed.proc.kill()
+    doomed.proc.wait()
+    # Fast DDS's default lease is 20 s: the daemon drops the node and its topic when it expires
+    assert wait_until(lambda: names(rostool(["node", "list"], graph_env)) == ["/steady"], timeout=45)
+    assert "/doomed_topic" not in names(rostool(["topic", "list"], graph_env))
+
+
+@pytest.mark.parametrize("distro", ["jazzy"])
 def test_a_killed_daemon_is_replaced_and_the_query_still_answers(
     start_peer: Callable[..., RclpyPeer], graph_env: dict[str, str]
 ) -> None:
