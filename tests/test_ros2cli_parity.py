@@ -299,18 +299,17 @@ DELIBERATE: dict[str, Deliberate] = {
         "rostool needs no ROS install: it lists the packages it carries, not the ones installed beside it",
         lambda ros2, tool: tool.code == 0 and "std_msgs\n" in tool.stdout,
     ),
-    "interface show geometry_msgs/msg/PointStamped": (
-        "rostool's definitions come from rosbags' store, which keeps no comments",
-        lambda ros2, tool: tool.stdout == _no_comments(ros2.stdout),
-    ),
-    "interface show test_msgs/action/Fibonacci": (
-        "rostool's definitions come from rosbags' store, which keeps no comments",
-        lambda ros2, tool: tool.stdout == _no_comments(ros2.stdout),
-    ),
-    "interface show --all-comments std_msgs/msg/Header": (
-        "rostool's definitions come from rosbags' store, which keeps no comments",
-        lambda ros2, tool: tool.stdout == _no_comments(ros2.stdout),
-    ),
+    **{
+        f"interface show {args}": (
+            "rostool's definitions come from rosbags' store, which keeps no comments",
+            lambda ros2, tool: tool.stdout == _no_comments(ros2.stdout),
+        )
+        for args in (
+            "geometry_msgs/msg/PointStamped",
+            "test_msgs/action/Fibonacci",
+            "--all-comments std_msgs/msg/Header",
+        )
+    },
     "interface show --no-comments std_srvs/srv/SetBool": (
         "ros2 leaves each comment's '#' behind; rostool strips the whole comment",
         lambda ros2, tool: tool.stdout == _no_comments(ros2.stdout),
