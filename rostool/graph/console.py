@@ -26,11 +26,6 @@ _ROS2_LEVELS = {"debug": 10, "info": 20, "warn": 30, "error": 40, "fatal": 50}
 _ROS1_LEVELS = {"debug": 1, "info": 2, "warn": 4, "error": 8, "fatal": 16}
 GET_LEVELS = "rcl_interfaces/srv/GetLoggerLevels"
 SET_LEVELS = "rcl_interfaces/srv/SetLoggerLevels"
-# rosbags' type stores hold rcl_interfaces' messages but no services: their .srv text, for both backends
-SRV_DEFINITIONS = {
-    GET_LEVELS: "string[] names\n---\nLoggerLevel[] levels\n",
-    SET_LEVELS: "LoggerLevel[] levels\n---\nSetLoggerLevelsResult[] results\n",
-}
 
 
 def level_name(value: str) -> str:
@@ -127,19 +122,12 @@ def _logger_services(graph: Any, node: str) -> tuple[str, str]:
     raise RostoolError(f"node {resolved} offers no logger services ({pair[0]}): {how}")
 
 
-def _known_services(graph: Any) -> None:
-    from rostool.graph.lifecycle import known_services
-
-    known_services(graph, SRV_DEFINITIONS)
-
-
 def logger_levels(graph: Any, node: str, names: list[str] | None = None) -> dict[str, str]:
     """Logger -> level name of `node` (ROS 1: every logger; ROS 2: `names`, by default its own logger)."""
     get, _set = _logger_services(graph, node)
     if graph.style == "ros1":
         _request, response = graph.service_call(get, ())
         return {str(lg.name): str(lg.level).lower() for lg in response.loggers}
-    _known_services(graph)
     names = names or [node_logger_name(graph.resolve(node))]
     _request, response = graph.service_call(get, (GET_LEVELS, json.dumps({"names": names})))
     by_number = {number: name for name, number in _ROS2_LEVELS.items()}
@@ -164,7 +152,6 @@ def set_logger_level(graph: Any, node: str, logger: str, level: str) -> None:
             )
         graph.service_call(set_, (json.dumps({"logger": logger, "level": level}),))
         return
-    _known_services(graph)
     request = {"levels": [{"name": logger, "level": _ROS2_LEVELS[level]}]}
     _request, response = graph.service_call(set_, (SET_LEVELS, json.dumps(request)))
     result = response.results[0] if response.results else None

@@ -20,12 +20,6 @@ GET_STATE = "lifecycle_msgs/srv/GetState"
 CHANGE_STATE = "lifecycle_msgs/srv/ChangeState"
 GET_TRANSITIONS = "lifecycle_msgs/srv/GetAvailableTransitions"
 USER_TRANSITIONS = ("configure", "cleanup", "activate", "deactivate", "shutdown")
-# rosbags' type stores hold lifecycle_msgs' messages but no services: their .srv text, for both backends
-SRV_DEFINITIONS = {
-    GET_STATE: "---\nState current_state\n",
-    CHANGE_STATE: "Transition transition\n---\nbool success\n",
-    GET_TRANSITIONS: "---\nTransitionDescription[] available_transitions\n",
-}
 
 
 @dataclass(frozen=True)
@@ -39,14 +33,6 @@ class Transition:
 def require_ros2(graph: Any, what: str) -> None:
     if graph.style != "ros2":
         raise RostoolError(f"{what} is a ROS 2 feature; select a ROS 2 graph with --ros2 (or ROS_VERSION=2)")
-
-
-def known_services(graph: Any, definitions: dict[str, str]) -> None:
-    """Make the backend's type support know services rosbags lacks, from their .srv text."""
-    from rostool.graph.ros2.services import register_service
-
-    for srv_type, text in definitions.items():
-        register_service(graph.types, srv_type, text)
 
 
 def lifecycle_nodes(graph: Any, include_hidden: bool) -> list[str]:
@@ -82,7 +68,6 @@ def is_lifecycle_node(graph: Any, node: str, include_hidden: bool) -> bool:
 
 
 def _call(graph: Any, node: str, service: str, srv_type: str, request: dict[str, Any] | None = None) -> Any:
-    known_services(graph, SRV_DEFINITIONS)
     values = (srv_type, json.dumps(request)) if request else (srv_type,)
     _request, response = graph.service_call(f"{node.rstrip('/')}/{service}", values)
     return response

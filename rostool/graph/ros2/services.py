@@ -50,6 +50,7 @@ SERVICE_QOS = dds.PROFILES["services_default"]
 REPLY_MATCH_WAIT = 2.0  # how long a server waits for its reply writer to match a new client's reader
 _ANY_SAMPLE = 0x7F
 
+# services rosbags' type stores lack (they hold the messages): their .srv text
 SRV_DEFINITIONS: dict[str, str] = {
     "rcl_interfaces/srv/ListParameters": "uint64 DEPTH_RECURSIVE=0\nstring[] prefixes\nuint64 depth\n"
     "---\nListParametersResult result\n",
@@ -63,6 +64,11 @@ SRV_DEFINITIONS: dict[str, str] = {
     "example_interfaces/srv/AddTwoInts": "int64 a\nint64 b\n---\nint64 sum\n",
     "example_interfaces/srv/SetBool": "bool data\n---\nbool success\nstring message\n",
     "example_interfaces/srv/Trigger": "---\nbool success\nstring message\n",
+    "lifecycle_msgs/srv/GetState": "---\nState current_state\n",
+    "lifecycle_msgs/srv/ChangeState": "Transition transition\n---\nbool success\n",
+    "lifecycle_msgs/srv/GetAvailableTransitions": "---\nTransitionDescription[] available_transitions\n",
+    "rcl_interfaces/srv/GetLoggerLevels": "string[] names\n---\nLoggerLevel[] levels\n",
+    "rcl_interfaces/srv/SetLoggerLevels": "LoggerLevel[] levels\n---\nSetLoggerLevelsResult[] results\n",
     "std_srvs/srv/Empty": "---\n",
     "std_srvs/srv/SetBool": "bool data\n---\nbool success\nstring message\n",
     "std_srvs/srv/Trigger": "---\nbool success\nstring message\n",
