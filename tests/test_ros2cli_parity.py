@@ -249,6 +249,18 @@ CASES = [
          "std_msgs/msg/String", "{data: hi}", normalize=subscription_wait),
     case("topic pub", "-1 -w --keep-alive", "topic", "pub", "-1", "-w", "1", "--keep-alive", "0.2",
          "/parity_pub", "std_msgs/msg/String", "{data: hi}", normalize=subscription_wait),
+    # --- more flags and errors ---
+    listing("topic type", "(unknown topic)", "topic", "type", "/parity_nothing", error=True),
+    listing("service type", "(unknown service)", "service", "type", "/parity_nothing", error=True),
+    listing("action info", "(unknown action)", "action", "info", "/parity_nothing"),
+    listing("node info", "--include-hidden", "node", "info", "--include-hidden", "/parity_server"),
+    case("param list", "--filter", "param", "list", "/parity_server", "--filter", "^s"),
+    case("param list", "--param-prefixes", "param", "list", "/parity_server", "--param-prefixes", "use"),
+    case("param describe", "(several)", "param", "describe", "/parity_server", "count", "label"),
+    case("topic pub", "-p", "topic", "pub", "-w", "1", "-t", "3", "-p", "2", "-r", "20", "/parity_pub",
+         "std_msgs/msg/String", "{data: hi}", normalize=subscription_wait),
+    case("interface proto", "(unknown type)", "interface", "proto", "std_msgs/msg/ParityNope", error=True),
+    case("interface package", "(unknown package)", "interface", "package", "parity_nopkg", error=True),
 ]
 # fmt: on
 
@@ -269,6 +281,11 @@ DELIBERATE: dict[str, Deliberate] = {
     "param set /parity_server count hello": (
         "a refused set exits 1 (ros2 exits 0), so scripts see the failure; the line names the node",
         _one_error_line,
+    ),
+    "action info /parity_nothing": (
+        "an action nobody serves prints ros2's zero counts and then exits 1 with one line (ros2 exits 0), so "
+        "a script can tell a mistyped name",
+        lambda ros2, tool: tool.stdout == ros2.stdout and tool.code == 1 and len(tool.stderr_lines) == 1,
     ),
     "param delete /parity_server parity_nope": (
         "a refused delete exits 1 (ros2 exits 0), so scripts see the failure; the line names the node",
