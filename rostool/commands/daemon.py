@@ -39,7 +39,13 @@ def daemon() -> None:
 @click.option("--idle", type=float, metavar="S", help="Exit after S seconds without a query.")
 @click.option("--debug", is_flag=True, help="Print where the daemon logs (ros2cli's flag).")
 def start(idle: float | None, debug: bool) -> None:
-    """Start the daemon of this graph, if it is not running, and wait until it answers."""
+    """Start the daemon of this graph, if it is not running, and wait until it answers.
+
+    \b
+    Examples:
+      rostool daemon start
+      rostool daemon start --idle 600   # exit after 10 minutes without a query
+    """
     client = _client()
     if client.status() is not None:
         click.echo("The daemon is already running")
@@ -55,7 +61,13 @@ def start(idle: float | None, debug: bool) -> None:
 @daemon.command()
 @click.option("--all", "every", is_flag=True, help="Stop every daemon of yours (all domains and keys).")
 def stop(every: bool) -> None:
-    """Stop the daemon of this graph (with --all, every daemon of this user)."""
+    """Stop the daemon of this graph (with --all, every daemon of this user).
+
+    \b
+    Examples:
+      rostool daemon stop
+      rostool daemon stop --all
+    """
     from rostool.graph.daemon.client import every_daemon
 
     clients = every_daemon() if every else [_client()]
@@ -66,7 +78,13 @@ def stop(every: bool) -> None:
 @daemon.command()
 @json_option
 def status(as_json: bool) -> None:
-    """Whether the daemon of this graph runs: its pid, socket, backend, domain, uptime and graph size."""
+    """Whether the daemon of this graph runs: its pid, socket, backend, domain, uptime and graph size.
+
+    \b
+    Examples:
+      rostool daemon status
+      ROS_DOMAIN_ID=7 rostool daemon status --json
+    """
     client = _client()
     found: dict[str, Any] = client.status() or {"running": False, "socket": str(client.place.socket)}
     if as_json:
