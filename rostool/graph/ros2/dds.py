@@ -280,6 +280,10 @@ class Participant:
         self.range = discovery_range(env)
         config = cyclone_config(env)
         silence_cyclone_log()
+        if self.range == "LOCALHOST" and not _user_selects_interfaces(env.get("CYCLONEDDS_URI", "")):
+            from rostool.graph.ros2.loopback_bind import bind_to_loopback
+
+            bind_to_loopback()  # Cyclone would listen on 0.0.0.0 too
         try:
             self._domain = Domain(self.domain_id, config) if config else None
             self.dp = DomainParticipant(self.domain_id, qos=Qos(Policy.Userdata(data=b"enclave=/;")))
