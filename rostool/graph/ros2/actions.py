@@ -26,6 +26,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from rostool.errors import RostoolError
+from rostool.graph.base import ActionSummary
 from rostool.graph.ros2 import dds
 from rostool.graph.ros2.definitions import action_types
 from rostool.graph.ros2.names import resolve, topic_to_dds
@@ -112,14 +113,6 @@ def split_action_service(service: str) -> tuple[str, str] | None:
     """`/fibonacci/_action/send_goal` -> ('/fibonacci', 'send_goal'); None for other services."""
     action, infix, rest = service.rpartition(ACTION_INFIX)
     return (action, rest) if infix and action and "/" not in rest else None
-
-
-@dataclass
-class ActionSummary:
-    name: str
-    type: str
-    servers: list[str]
-    clients: list[str]
 
 
 def list_actions(graph: Ros2Graph, nodes: bool = False) -> list[ActionSummary]:
