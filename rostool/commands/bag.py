@@ -322,7 +322,7 @@ FORMAT_OPTION = click.option(
 @click.option("--start", metavar="S", help=f"Drop messages before: {TIME_HELP}.")
 @click.option("--end", metavar="S", help=f"Drop messages after: {TIME_HELP}.")
 @distro_option
-@click.option("--force", is_flag=True, help="Overwrite DST if it exists.")
+@click.option("--force", is_flag=True, help="Replace DST if it is a bag (never an input, nor other files).")
 @jobs_option
 def convert(
     paths: tuple[str, ...],
@@ -375,7 +375,7 @@ def convert(
 @click.option("--filter", "expr", metavar="EXPR", help="Keep messages where EXPR holds (names: m, topic, t).")
 @FORMAT_OPTION
 @distro_option
-@click.option("--force", is_flag=True, help="Overwrite OUT if it exists.")
+@click.option("--force", is_flag=True, help="Replace OUT if it is a bag (never an input, nor other files).")
 @jobs_option
 def filter_(
     paths: tuple[str, ...],
@@ -698,7 +698,7 @@ def _parse_duration(text: str | None) -> float | None:
 @click.option("--lz4", "compression", flag_value="lz4", help="Compress .bag chunks with lz4.")
 @click.option("-j", "--bz2", "compression", flag_value="bz2", help="Compress .bag chunks with bz2.")
 @click.option("-q", "--quiet", is_flag=True, help="No progress and no summary on stderr.")
-@click.option("--force", is_flag=True, help="Overwrite an existing output file.")
+@click.option("--force", is_flag=True, help="Replace an existing output bag (nothing else).")
 @click.option("--include-hidden-topics", is_flag=True, help="ROS 2: -a/-e also record hidden topics (/_x).")
 @interfaces_option
 @qos_options

@@ -238,7 +238,7 @@ RECORD_LISTS = (
 @click.option("-q", "--quiet", is_flag=True, help="rostool: no progress and no summary on stderr.")
 @click.option("-O", "--output-name", metavar="NAME",
               help="rostool: like -o; NAME.bag writes a ROS 1 bag (messages converted).")  # fmt: skip
-@click.option("--force", is_flag=True, help="rostool: overwrite an existing output.")
+@click.option("--force", is_flag=True, help="rostool: replace an existing output bag (nothing else).")
 @click.option("--compression-queue-size", type=click.IntRange(min=0), default=1, help="Accepted.")
 @click.option("--compression-threads", type=click.IntRange(min=0), default=0, help="Accepted.")
 @click.option("--compression-threads-priority", type=int, default=0, help="Accepted.")
