@@ -19,6 +19,7 @@ from typing import Any, BinaryIO
 
 import numpy as np
 
+from rostool.bag.bounded import inflate
 from rostool.errors import RostoolError
 
 _MESSAGE = 0x05
@@ -102,46 +103,27 @@ def _chunk_records(handle: BinaryIO, offset: int, length: int, path: Path) -> by
     raw = handle.read(length)
     if len(raw) != length or raw[0] != _CHUNK:
         raise RostoolError(f"{path}: a chunk the index points to is not there; try `rostool bag reindex`")
-    _start, _end, uncompressed_size, _crc = _CHUNK_HEAD.unpack_from(raw, 9)
-    pos = 9 + _CHUNK_HEAD.size
-    (name_length,) = struct.unpack_from("<I", raw, pos)
-    compression = raw[pos + 4 : pos + 4 + name_length].decode("ascii", "replace")
-    pos += 4 + name_length
-    (records_length,) = struct.unpack_from("<Q", raw, pos)
+    try:
+        _start, _end, uncompressed_size, _crc = _CHUNK_HEAD.unpack_from(raw, 9)
+        pos = 9 + _CHUNK_HEAD.size
+        (name_length,) = struct.unpack_from("<I", raw, pos)
+        compression = raw[pos + 4 : pos + 4 + name_length].decode("ascii", "replace")
+        pos += 4 + name_length
+        (records_length,) = struct.unpack_from("<Q", raw, pos)
+    except struct.error as err:
+        raise RostoolError(f"{path}: a chunk's header is cut short; try `rostool bag reindex`") from err
     records = raw[pos + 8 : pos + 8 + records_length]
     try:
-        # bounded by the declared size: a chunk that declares little and inflates to gigabytes stops there
-        if compression == "zstd":
-            data = _bounded_zstd(records, uncompressed_size + 1)
-        elif compression == "lz4":
-            import lz4.frame
-
-            data = lz4.frame.LZ4FrameDecompressor().decompress(records, max_length=uncompressed_size + 1)
-        else:
-            data = records
-    except Exception as err:  # the compressors' own error types
-        raise RostoolError(f"{path}: a chunk does not decompress ({err}); try `rostool bag reindex`") from err
+        # no more than the declared size: a chunk that declares little and inflates to gigabytes stops there
+        data = inflate(compression, records, uncompressed_size) if compression else records
+    except RostoolError as err:
+        raise RostoolError(f"{path}: {err}", err.exit_code) from err
     if len(data) != uncompressed_size:
         raise RostoolError(
             f"{path}: a chunk holds {len(data)} bytes where its header says {uncompressed_size};"
             " try `rostool bag reindex`"
         )
     return bytes(data)
-
-
-def _bounded_zstd(records: bytes, limit: int) -> bytes:
-    import zstandard
-
-    parts: list[bytes] = []
-    got = 0
-    with zstandard.ZstdDecompressor().stream_reader(records) as reader:
-        while got < limit:
-            part = reader.read(limit - got)
-            if not part:
-                break
-            parts.append(part)
-            got += len(part)
-    return b"".join(parts)
 
 
 def _split(data: bytes, channels: Collection[int], path: Path) -> Iterator[ChannelBatch]:
