@@ -248,7 +248,7 @@ def _graph_names(graph: Any, kind: str, node: str | None, timeout: float) -> lis
     if kind == "topic":
         names = [topic.name for topic in graph.topics()]
     elif kind == "node":
-        names = list(graph.node_names())
+        names = list(dict.fromkeys(graph.node_names()))
     elif kind == "service":
         names = [name for name, _type, _nodes in graph.services()]
     elif kind == "action":

@@ -600,11 +600,6 @@ def twins(tmp_path_factory: pytest.TempPathFactory) -> Iterator[ParityGraph]:
     ],
     ids=lambda v: getattr(v, "id", ""),
 )
-@pytest.mark.xfail(
-    strict=True,
-    reason="both backends' node_names() return a set (graph/ros2/graph.py, graph/rclpy/graph.py): nodes "
-    "sharing a name show once; node.py warns as ros2 does once they come twice",
-)
 def test_duplicate_node_names(twins: ParityGraph, twin_case: Case, warning: str) -> None:
     outcome = twins.compare(twin_case)
     assert outcome.ros2.code == 0 and outcome.ros2.stderr.startswith(warning), outcome.ros2.stderr

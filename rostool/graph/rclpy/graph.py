@@ -192,7 +192,7 @@ class RclpyGraph(ServiceVerbs, ParameterVerbs, ActionVerbs, BagVerbs, Refusals):
     # --- nodes --------------------------------------------------------------------------------
     def node_names(self) -> list[str]:
         self.settle(require_peers=True)
-        return sorted({self._full_name(n, ns) for n, ns in self._node_pairs()})
+        return sorted(self._full_name(n, ns) for n, ns in self._node_pairs())  # a name twice: two nodes
 
     def node_uri(self, name: str) -> str:
         resolved = resolve(name)

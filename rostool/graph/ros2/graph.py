@@ -261,7 +261,7 @@ class Ros2Graph(Ros2Verbs):
     # --- nodes --------------------------------------------------------------------------------
     def node_names(self) -> list[str]:
         cache = self._settled(require_peers=True, nodes=True)
-        return sorted({node.full_name for node in cache.node_entries()})
+        return sorted(node.full_name for node in cache.node_entries())  # a name twice: two nodes, as in ros2
 
     def node_uri(self, name: str) -> str:
         cache = self._settled(require_peers=True, nodes=True)
