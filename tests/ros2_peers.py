@@ -34,6 +34,9 @@ FASTDDS_PROFILE = """<?xml version="1.0" encoding="UTF-8"?>
       <transport_id>loopback_udp</transport_id>
       <type>UDPv4</type>
       <interfaceWhiteList><address>127.0.0.1</address></interfaceWhiteList>
+      <!-- initial peers reach participant indexes 0..N-1 on 127.0.0.1; Fast DDS's default of 4 leaves a
+           newcomer blind to the fifth participant of a domain (a test's peers, ros2's daemon, rostool) -->
+      <maxInitialPeersRange>32</maxInitialPeersRange>
     </transport_descriptor>
   </transport_descriptors>
   <participant profile_name="loopback_only" is_default_profile="true">
