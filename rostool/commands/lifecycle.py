@@ -31,7 +31,7 @@ def lifecycle() -> None:
       rostool --ros2 lifecycle list /camera           # the transitions available now
       rostool --ros2 lifecycle set /camera configure  # Transitioning successful
 
-    ros2cli flags with no meaning here (--no-daemon, --spin-time, -s/--use-sim-time) are accepted and
+    ros2cli flags with no meaning here (--spin-time, -s/--use-sim-time) are accepted and
     ignored.
     """
 

@@ -18,7 +18,7 @@ def node() -> None:
 
     Flags and output follow the selected ROS version (--ros1/--ros2, ROS_VERSION, detection): rosnode's
     forms under ROS 1, ros2 node's under ROS 2; --json works in both. ros2cli flags with no meaning here
-    (--no-daemon, --spin-time, -s/--use-sim-time) are accepted and ignored.
+    (--spin-time, -s/--use-sim-time) are accepted and ignored.
 
     \b
     Examples:
@@ -32,7 +32,8 @@ def node() -> None:
 def _ignored(func: Any) -> Any:
     """ros2cli's node options with no meaning here: accepted, said so in --help, ignored."""
     options = (
-        click.option("--no-daemon", is_flag=True, help="Accepted and ignored (rostool has no daemon)."),
+        click.option("--no-daemon", is_flag=True,
+                     help="Ask the ROS 2 graph directly, not its daemon (ROSTOOL_NO_DAEMON=1)."),
         click.option("--spin-time", type=float, metavar="S",
                      help="Accepted and ignored (rostool waits for discovery to settle itself)."),
         click.option("-s", "--use-sim-time", is_flag=True, help="Accepted and ignored (wall clock)."),

@@ -75,7 +75,7 @@ def param() -> None:
 
     Flags and output follow the selected ROS version: rosparam's under ROS 1, ros2 param's under ROS 2
     (NODE first, --include-hidden-nodes, --timeout). --json works in both. ros2cli flags with no meaning
-    here (--no-daemon, --spin-time, -s/--use-sim-time) are accepted and ignored.
+    here (--spin-time, -s/--use-sim-time) are accepted and ignored.
     """
 
 
@@ -407,7 +407,8 @@ def delete(
     "--output-dir",
     type=click.Path(),
     metavar="DIR",
-    help="ROS 2: write DIR/<node>.yaml (ns/node -> ns__node.yaml) instead of printing.",
+    help="ROS 2: write DIR/<node>.yaml (ns/node -> ns__node.yaml) instead of printing; DIR must exist, as "
+    "in ros2 param dump.",
 )
 @click.option(
     "--print", "print_only", is_flag=True, help="ROS 2: print (the default; wins over --output-dir)."
@@ -431,7 +432,7 @@ def dump(
       rostool param dump params.yaml
       rostool param dump robot.yaml /robot
       rostool --ros2 param dump /talker > talker.yaml
-      rostool --ros2 param dump /robot/talker --output-dir params/    # params/robot__talker.yaml
+      mkdir -p params && rostool --ros2 param dump /robot/talker --output-dir params/
     """
     from rostool.output.yaml_text import param_yaml
 

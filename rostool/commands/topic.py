@@ -30,7 +30,7 @@ def topic() -> None:
 
     Flags and output follow the selected ROS version (--ros1/--ros2, ROS_VERSION, detection): rostopic's
     forms under ROS 1, ros2 topic's under ROS 2. rostool's extras (several --field, --json, --filter,
-    --csv) work in both. ros2cli flags with no meaning here (--no-daemon, --spin-time,
+    --csv) work in both. ros2cli flags with no meaning here (--spin-time,
     -s/--use-sim-time) are accepted and ignored.
 
     \b
@@ -48,7 +48,7 @@ def ignored_ros2_options(*names: str) -> Callable[[Callable[..., Any]], Callable
     """ros2cli options that have no meaning for rostool: accepted, said so in --help, and ignored."""
     choices = {
         "no_daemon": click.option("--no-daemon", is_flag=True,
-                                  help="Accepted and ignored (rostool has no daemon)."),
+                                  help="Ask the ROS 2 graph directly, not its daemon (ROSTOOL_NO_DAEMON=1)."),
         "spin_time": click.option("--spin-time", type=float, metavar="S",
                                   help="Accepted and ignored (ros2cli: discovery wait; rostool waits for "
                                   "discovery to settle itself)."),
