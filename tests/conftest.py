@@ -35,6 +35,9 @@ LONG_MODULES = {
     "test_ros2_fastdds_rpc",
     "test_ros2_real_bad_input",
     "test_bad_input_live",
+    "test_lifecycle",
+    "test_daemon",
+    "test_console",
 }
 
 
@@ -61,22 +64,19 @@ def _alone_when_marked(
     request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory
 ) -> Iterator[None]:
     """Under xdist, a test marked `alone` holds the session's gate exclusively, every other test shares it.
-    A turnstile taken before the gate keeps a waiting `alone` test from being starved by the others."""
+    `alone` tests are collected last, so they are handed out when nothing else is left to start: no
+    turnstile, the other workers finish what they hold (and the waiting costs no idle worker)."""
     if not os.environ.get("PYTEST_XDIST_WORKER"):
         yield
         return
     session_dir = tmp_path_factory.getbasetemp().parent  # shared by the workers of one session
     alone = request.node.get_closest_marker("alone") is not None
-    with open(session_dir / "turnstile.lock", "a") as turnstile, open(session_dir / "gate.lock", "a") as gate:
-        fcntl.flock(turnstile, fcntl.LOCK_EX)
+    with open(session_dir / "alone.lock", "a") as gate:
         fcntl.flock(gate, fcntl.LOCK_EX if alone else fcntl.LOCK_SH)
-        if not alone:
-            fcntl.flock(turnstile, fcntl.LOCK_UN)
         try:
             yield
         finally:
             fcntl.flock(gate, fcntl.LOCK_UN)
-            fcntl.flock(turnstile, fcntl.LOCK_UN)
 
 
 @pytest.fixture

@@ -259,6 +259,7 @@ def test_topic_pub_forms(graph_env: dict[str, str], fixture_graph: dict[str, Rcl
     c.done()
 
 
+@pytest.mark.alone  # hz within 2 % of a 1 Hz timer: a loaded machine delays the timer
 def test_topic_rates(graph_env: dict[str, str], fixture_graph: dict[str, RclpyPeer]) -> None:
     env, c = graph_env, Cases()
     out = ros2(env, "topic", "delay", "/cmd_vel", "--duration", "4.5").stdout.splitlines()
