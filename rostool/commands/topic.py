@@ -516,18 +516,25 @@ def _counter(meter: Any, keep: Callable[[Any], bool] | None = None) -> Any:
 def _report_loop(meters: dict[str, Any], as_json: bool, duration: float | None, style: str = "ros1") -> None:
     started = time.monotonic()
     next_report = started + 1.0
+    printed: dict[str, int] = {}
     while duration is None or time.monotonic() - started < duration:
         time.sleep(max(0.0, min(next_report, started + (duration or 1e12)) - time.monotonic()))
         next_report += 1.0
-        _print_rates(meters, as_json, style)
+        _print_rates(meters, as_json, style, printed)
 
 
-def _print_rates(meters: dict[str, Any], as_json: bool, style: str = "ros1") -> None:
+def _print_rates(
+    meters: dict[str, Any], as_json: bool, style: str = "ros1", printed: dict[str, int] | None = None
+) -> None:
+    """One report; `printed` (topic -> messages counted at its last report) leaves out topics that got
+    nothing since: rostopic then says "no new messages", ros2 topic hz prints nothing."""
+    printed = {} if printed is None else printed
     rows = []
     for topic_name, meter in meters.items():
         summary = meter.summary()
-        if summary is None:
+        if summary is None or printed.get(topic_name) == meter.total:
             continue
+        printed[topic_name] = meter.total
         rate = 1.0 / summary.mean if summary.mean > 0 else 0.0
         rows.append((topic_name, rate, summary, meter.total))
     if as_json:
