@@ -1,11 +1,15 @@
 """A subscription whose messages wait for the main thread (echo, delay).
 
-Network threads append to a deque (no lock per message) and wake the consumer only when it sleeps;
-the consumer drains everything available and runs `on_idle` (e.g. flush stdout) before it waits.
+Network threads append to a deque and wake the consumer only when it sleeps; the consumer drains
+everything available and runs `on_idle` (e.g. flush stdout) before it waits. What waits is bounded by a
+count and by bytes: past BYTE_BUDGET the oldest messages are dropped (and counted, one warning line a
+second), as rostopic's subscriber queue drops, so a consumer that falls behind (output into a pipe nobody
+reads) keeps its memory bounded whatever the messages' size.
 """
 
 from __future__ import annotations
 
+import sys
 import threading
 import time
 from collections import deque
@@ -15,6 +19,7 @@ from rostool.errors import RostoolError
 from rostool.graph.base import Graph, Received, Subscription
 
 BACKLOG_LIMIT = 20000
+BYTE_BUDGET = 64 * 1024 * 1024  # payload bytes waiting for the consumer
 
 
 class Inbox:
@@ -23,14 +28,43 @@ class Inbox:
     def __init__(self, graph: Graph, topic: str) -> None:
         self._items: deque[Received | str] = deque()
         self._wake = threading.Event()
+        self._bytes = 0  # payload bytes in _items
+        self._count_lock = threading.Lock()
+        self.dropped = 0
+        self._warned = (0, 0.0)  # dropped count and time of the last warning
         self.subscription: Subscription = graph.subscribe(topic, self._put, self._error)
 
     def _put(self, received: Received | str) -> None:
         while len(self._items) > BACKLOG_LIMIT:  # backpressure onto TCP instead of unbounded memory
             time.sleep(0.001)
-        self._items.append(received)
+        size = _size(received)
+        with self._count_lock:
+            self._bytes += size
+            self._items.append(received)
+            while self._bytes > BYTE_BUDGET and len(self._items) > 1:
+                oldest = self._items.popleft()
+                self._bytes -= _size(oldest)
+                self.dropped += 1
+        if self.dropped:  # said here: the consumer may be stuck writing to a pipe nobody reads
+            self._warn_dropped()
         if not self._wake.is_set():
             self._wake.set()
+
+    def _take(self) -> Received | str:
+        with self._count_lock:
+            item = self._items.popleft()
+            self._bytes -= _size(item)
+        return item
+
+    def _warn_dropped(self) -> None:
+        count, when = self._warned
+        now = time.monotonic()
+        if self.dropped > count and now - when >= 1.0:
+            sys.stderr.write(
+                f"rostool: warning: dropped {self.dropped - count} messages: the output is not read as fast "
+                f"as they come ({BYTE_BUDGET // (1024 * 1024)} MB wait at most)\n"
+            )
+            self._warned = (self.dropped, now)
 
     def _error(self, message: str) -> None:
         self._put(message)
@@ -43,7 +77,7 @@ class Inbox:
         last = time.monotonic()
         while True:
             try:
-                item = items.popleft()
+                item = self._take()
             except IndexError:
                 if on_idle is not None:
                     on_idle()
@@ -61,3 +95,8 @@ class Inbox:
 
     def close(self) -> None:
         self.subscription.close()
+
+
+def _size(item: Received | str) -> int:
+    payload = getattr(item, "payload", None)
+    return len(payload) if payload is not None else 0
