@@ -68,7 +68,7 @@ def test_parameters_of_a_real_node(start_peer: Start, tool: Tool, tmp_path: Path
     listed = names.stdout.split()
     assert {"flag", "count", "speed", "label", "blob", "ids", "gains", "names", "use_sim_time"} <= set(listed)
     assert tool(["param", "get", "/talker", "speed"]).stdout == "Double value is: 0.5\n"
-    assert tool(["param", "get", "/talker", "ids"]).stdout == "Integer values are: array('q', [1, 2, 3])\n"
+    assert tool(["param", "get", "/talker", "ids"]).stdout == "Integer values are: [1, 2, 3]\n"
 
     changed = tool(["param", "set", "/talker", "speed", "0.75"])
     assert changed.stdout == "Set parameter successful\n", changed.stderr

@@ -318,7 +318,7 @@ def test_node_list_and_info(graph_env: dict[str, str], fixture_graph: dict[str, 
             [x for x in lines if re.match(r"\s*/repeater/.*parameter.*: rcl_interfaces/srv/.*Parameter.*", x)]
         )
         == 6
-        and lines[-2:] == ["  Action Servers:", "  Action Clients:"],
+        and lines[-4:] == ["  Action Servers:", "", "  Action Clients:", ""],  # ros2node: empty sections
         lines,
     )
     hidden = ros2(env, "node", "info", "/_hidden_talker")

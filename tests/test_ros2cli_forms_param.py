@@ -28,8 +28,8 @@ GET_VERB_PARAM_VALUES = {
     "str_param": "String value is: Hello World\n",
     "byte_array": "Byte values are: [b'p', b'v']\n",
     "bool_array": "Boolean values are: [True, False, True]\n",
-    "int_array": "Integer values are: array('q', [1, 2, 3])\n",
-    "double_array": "Double values are: array('d', [1.0, 2.0, 3.0])\n",
+    "int_array": "Integer values are: [1, 2, 3]\n",  # as Jazzy's ros2 param get prints them
+    "double_array": "Double values are: [1.0, 2.0, 3.0]\n",
     "str_array": "String values are: ['Hello', 'World']\n",
     "parameter_with_no_value": "Parameter not set.\n",
 }
