@@ -142,25 +142,33 @@ def test_a_ray_cluster_by_address_and_a_bad_bag(tmp_path: Path, ray_env: dict[st
 
 
 API_SCRIPT = """
-import json, sys
+import collections, json, sys
+import pyarrow.parquet as pq
 from rostool.data import read_bag_table, read_bags
-bags = sys.argv[1:]
+out, bags = sys.argv[1], sys.argv[2:]
 table = read_bag_table(bags[0], "/topic")
 ds = read_bags(bags, topics=["/topic"])
-counts = {row["bag"]: row["count()"] for row in ds.groupby("bag").count().take_all()}
 rows = ds.filter(lambda row: row["bag"] == "talker_mcap").take_all()
+ds.write_parquet(out)
+written = pq.read_table(out)
+counts = collections.Counter(written.column("bag").to_pylist())
 print(json.dumps({"table": table.to_pylist(), "columns": ds.columns(), "counts": counts, "rows": rows}))
 """
 
 
 def test_python_api_tables_and_ray_dataset(tmp_path: Path, ray_env: dict[str, str]) -> None:
-    """read_bag_table gives export's table; read_bags a Ray Dataset of the same rows with bag and topic."""
+    """read_bag_table gives export's table; read_bags a Ray Dataset of the same rows with bag and topic, which
+    Ray Data filters and writes as Parquet."""
     import pyarrow.parquet as pq
 
     fleet = _fleet(tmp_path)
     bags = [str(fleet / "talker_mcap"), str(fleet / "talker_sqlite3")]
     run = subprocess.run(
-        [sys.executable, "-c", API_SCRIPT, *bags], env=ray_env, capture_output=True, text=True, timeout=240
+        [sys.executable, "-c", API_SCRIPT, str(tmp_path / "written"), *bags],
+        env=ray_env,
+        capture_output=True,
+        text=True,
+        timeout=240,
     )
     assert run.returncode == 0, run.stderr[-3000:]
     got = json.loads(run.stdout.strip().splitlines()[-1])

@@ -32,6 +32,10 @@ if TYPE_CHECKING:
     from rostool.graph.ros2.types import TypeSupport
 
 GRAPH_QUIET_SECONDS = 0.5
+# a direct listing (no daemon) answers no sooner than this: the participants that answer a newcomer's first
+# announcements (and their endpoints) keep coming for a second or two, later on a loaded machine; the
+# daemon's long-lived graph answers at once
+SETTLE_MIN_SECONDS = 2.0
 # nothing but ourselves seen: how long before "no nodes found". A Fast DDS participant may answer a new one
 # only with its next periodic announcement (every 3 s), so discovery takes from 0 to about 3 s
 SETTLE_MAX_SECONDS = 4.5
@@ -146,7 +150,7 @@ class RclpyGraph(ServiceVerbs, ParameterVerbs, ActionVerbs, BagVerbs, Refusals):
             # endpoints may come before their node's name (rmw learns names from ros_discovery_info), and a
             # hidden node alone (a graph daemon's, ros2cli's) is often found before the others
             named = any(not hidden_name(self._full_name(n, ns)) for n, ns in last[0])
-            quiet = named and now - changed >= GRAPH_QUIET_SECONDS
+            quiet = named and now - changed >= GRAPH_QUIET_SECONDS and now - started >= SETTLE_MIN_SECONDS
             if found and (self._settled or quiet or now - started >= SETTLE_MAX_SECONDS):
                 self._settled = True
                 return True
