@@ -359,10 +359,27 @@ def test_same_as_ros2(graph: ParityGraph, case: Case) -> None:
                 failed.append(f"{backend}: not the documented difference ({why})")
             continue
         ok = _same(case, ros2, tool)
+        for _again in range(RCLPY_RETRIES if backend == "rclpy" and _reads_the_graph(case) else 0):
+            if ok:
+                break
+            # a direct rclpy call may answer before Fast DDS has brought every participant (ros2 answers
+            # from its warm daemon): a read asked again must then agree
+            tool = graph.rostool(backend, list(case.args), case.timeout, case.stdin)
+            ok = _same(case, ros2, tool)
         judge(case, backend, SAME if ok else DIFFERS)
         if not ok:
             failed.append(_describe(backend, case, ros2, tool))
     assert not failed, "\n".join(failed)
+
+
+RCLPY_RETRIES = 2
+_READS = {"list", "info", "type", "find", "get", "describe", "dump"}
+
+
+def _reads_the_graph(case: Case) -> bool:
+    """A case that only reads (its answer may be incomplete while discovery goes on, never different)."""
+    args = list(case.args)
+    return len(args) >= 2 and args[0] in ("node", "topic", "service", "action", "param") and args[1] in _READS
 
 
 def _describe(backend: str, case: Case, ros2: Run, tool: Run) -> str:
