@@ -78,4 +78,6 @@ fi
 # pytest-xdist: the suite mostly waits (DDS discovery, peers starting), so more workers than cores pay off
 # (CONTRIBUTING.md, "Test suite timing"); loadgroup keeps xdist_group-marked tests on one worker.
 # Arguments given to test.sh come last and win (`./test.sh -n 0 tests/test_cli.py`).
-exec .venv/bin/python -m pytest -q -n 6 --dist loadgroup "$@"
+# --reruns: a stopgap while real-peer discovery under a loaded 2-core machine can still miss a participant
+# (issue 23): a test passes only if one of its three runs passes whole; every rerun is listed in the summary.
+exec .venv/bin/python -m pytest -q -n 4 --dist loadgroup --reruns 2 --reruns-delay 1 -r R "$@"
