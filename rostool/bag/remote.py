@@ -26,9 +26,9 @@ BAG_SUFFIXES = (".bag", ".mcap", ".db3")
 
 
 def is_remote(text: object) -> bool:
-    return isinstance(text, (str, RemotePath)) and (
-        isinstance(text, RemotePath) or (bool(_URI.match(text)) and not text.startswith("file://"))
-    )
+    if isinstance(text, RemotePath):
+        return True
+    return isinstance(text, str) and bool(_URI.match(text)) and not text.startswith("file://")
 
 
 @dataclass(frozen=True)
