@@ -243,7 +243,7 @@ def _from_graph(ctx: click.Context, kind: str) -> list[str]:
 
 
 def _graph_names(graph: Any, kind: str, node: str | None, timeout: float) -> list[str]:
-    from rostool.graph.base import hidden_name
+    from rostool.interfaces.names import hidden_name
 
     if kind == "topic":
         names = [topic.name for topic in graph.topics()]
@@ -291,7 +291,7 @@ def _matching_types(kind: str, version: int, incomplete: str) -> list[str]:
 def _type_names(kind: str, version: int) -> list[str]:
     """Built-in type names (rosbags' stores, rostool's services and actions) and those of the interface
     sources rostool searches (ROSTOOL_INTERFACES, ROS_PACKAGE_PATH, the workspace)."""
-    from rostool.graph import interface_paths_from_env
+    from rostool.interfaces.sources import interface_paths_from_env
 
     paths = interface_paths_from_env()
     if version == 2:

@@ -18,7 +18,8 @@ from tests.test_ros2_graph import ros2_env
 FIB_SERVER = r"""
 import sys, threading, time
 from cyclonedds._clayer import ddspy_write
-from rostool.graph.ros2.actions import FEEDBACK_QOS, STATUS_ARRAY, STATUS_QOS, register_action
+from rostool.graph.ros2.actions import FEEDBACK_QOS, STATUS_ARRAY, STATUS_QOS
+from rostool.interfaces.ros2_action import register_action
 from rostool.graph.ros2.graph import Ros2Graph
 from rostool.graph.ros2.names import topic_to_dds
 from rostool.graph.ros2.services import ServiceServer

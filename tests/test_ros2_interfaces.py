@@ -29,7 +29,8 @@ SOURCES = {
 ROBO_NODE = r"""
 import sys, threading, time
 from cyclonedds._clayer import ddspy_write
-from rostool.graph.ros2.actions import FEEDBACK_QOS, register_action
+from rostool.graph.ros2.actions import FEEDBACK_QOS
+from rostool.interfaces.ros2_action import register_action
 from rostool.graph.ros2.graph import Ros2Graph
 from rostool.graph.ros2.names import topic_to_dds
 from rostool.graph.ros2.services import ServiceServer

@@ -13,8 +13,8 @@ from typing import Any
 import pytest
 
 from rostool.bag.reader import BagReader
-from rostool.bag.typestores import builtin_store
 from rostool.graph.ros2 import type_description as td
+from rostool.interfaces.typestores import builtin_store
 from tests.support import interface_workspace, rostool, rostool_popen, stop
 from tests.test_ros2_graph import ros2_env
 from tests.test_ros2_interfaces import SOURCES

@@ -29,8 +29,8 @@ from rostool.bag.crossver import CrossVersionStores
 from rostool.bag.open import BagInput, describe, detect
 from rostool.bag.reader import BagReader
 from rostool.bag.replace import check_replaceable, swap_into_place
-from rostool.bag.typestores import DEFAULT_DISTRO
 from rostool.errors import RostoolError
+from rostool.interfaces.typestores import DEFAULT_DISTRO
 
 OutputFormat = Literal["bag", "mcap", "db3"]
 Predicate = Callable[[object, str, int], bool]  # (message, topic, timestamp ns) -> keep

@@ -19,8 +19,8 @@ from typing import Any, Literal
 from rostool.bag.columnar import columns_from_messages
 from rostool.bag.export_columns import Column, TypePlan, arrow_type, is_scalar
 from rostool.bag.open import warn
-from rostool.bag.typestores import DEFAULT_DISTRO
 from rostool.errors import RostoolError
+from rostool.interfaces.typestores import DEFAULT_DISTRO
 
 TableFormat = Literal["parquet", "csv", "arrow"]  # arrow: pyarrow Tables in memory (ExportResult.tables)
 _COLUMNAR = ("parquet", "arrow")

@@ -22,8 +22,8 @@ from typing import Any
 from rosbags.interfaces import Connection, ConnectionExtRosbag1, MessageDefinitionFormat
 
 from rostool.bag.open import BagInput, detect, fallback_warning, guard, sniff, warn
-from rostool.bag.typestores import DEFAULT_DISTRO, StoredDefinition, TypeResolver
 from rostool.errors import RostoolError
+from rostool.interfaces.typestores import DEFAULT_DISTRO, StoredDefinition, TypeResolver
 
 MessageTuple = tuple[Connection, int, bytes | memoryview]
 

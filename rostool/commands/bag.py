@@ -15,11 +15,11 @@ from typing import Any
 import click
 
 from rostool.bag.many import BagItem
-from rostool.bag.typestores import DEFAULT_DISTRO, DISTROS
 from rostool.commands._common import ExtensibleGroup, interfaces_option
 from rostool.commands._qos import qos_options
 from rostool.errors import RostoolError
 from rostool.graph.qos import QosRequest
+from rostool.interfaces.typestores import DEFAULT_DISTRO, DISTROS
 
 CONTEXT = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
 TIME_HELP = "seconds since the epoch, or +S for S seconds after the bag's first message"

@@ -60,7 +60,7 @@ def plot(
     """
     from rostool.bag.convert import parse_time
     from rostool.bag.reader import BagReader
-    from rostool.bag.typestores import DEFAULT_DISTRO
+    from rostool.interfaces.typestores import DEFAULT_DISTRO
     from rostool.output.plot_data import Sampler, csv_header, csv_row, parse_spec
     from rostool.output.plot_draw import check_output
 

@@ -21,11 +21,11 @@ from typing import Any
 
 import click
 
-from rostool.bag.typestores import DEFAULT_DISTRO, DISTROS
 from rostool.commands._common import interfaces_option
 from rostool.commands._qos import qos_options
 from rostool.errors import RostoolError
 from rostool.graph.qos import QosRequest
+from rostool.interfaces.typestores import DEFAULT_DISTRO, DISTROS
 
 CONTEXT = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
 QOS_KEYS = {

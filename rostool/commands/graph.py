@@ -93,7 +93,7 @@ def graph(
       rostool graph --dot | dot -Tpng > graph.png
       rostool --ros2 graph --json
     """
-    from rostool.output.graph_model import collect
+    from rostool.graph.topology import collect
 
     check_options(as_dot, as_json, output)
     with live_graph(ctx) as live:

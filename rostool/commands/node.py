@@ -70,7 +70,7 @@ def list_nodes(ctx: click.Context, show_all: bool, count_nodes: bool, as_json: b
       rostool node list
       rostool --ros2 node list -a -c
     """
-    from rostool.graph.base import hidden_name
+    from rostool.interfaces.names import hidden_name
 
     with live_graph(ctx) as graph:
         names = graph.node_names()
@@ -108,7 +108,7 @@ def info(ctx: click.Context, name: str, include_hidden: bool, as_json: bool) -> 
       rostool node info /hello_world_pub_node
     """
     from rostool.errors import RostoolError
-    from rostool.graph.base import hidden_name
+    from rostool.interfaces.names import hidden_name
 
     with live_graph(ctx) as graph:
         if graph.style == "ros2":
@@ -183,7 +183,7 @@ def _actions(services: list[tuple[str, str]]) -> list[tuple[str, str]]:
 def _info_ros2(details: NodeInfo, as_json: bool, include_hidden: bool = False) -> None:
     """ros2 node info's form: the node's endpoints grouped by kind, with their types; actions are told by
     their hidden services, which (as every hidden name) show only with --include-hidden."""
-    from rostool.graph.base import hidden_name
+    from rostool.interfaces.names import hidden_name
 
     def shown(entries: list[tuple[str, str]]) -> list[tuple[str, str]]:
         return sorted(e for e in entries if include_hidden or not hidden_name(e[0]))

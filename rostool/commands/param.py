@@ -15,7 +15,7 @@ import click
 from rostool.commands._common import json_option, live_graph, print_json
 from rostool.commands.topic import ignored_ros2_options
 from rostool.errors import RostoolError
-from rostool.graph.base import hidden_name
+from rostool.interfaces.names import hidden_name
 
 hidden_nodes_option = click.option(
     "--include-hidden-nodes", "include_hidden", is_flag=True, help="ROS 2: hidden nodes (_name) count too."

@@ -13,7 +13,7 @@ from rostool.commands._common import json_option, live_graph, print_json
 from rostool.commands.srv import interfaces_option
 from rostool.commands.topic import ignored_ros2_options
 from rostool.errors import RostoolError
-from rostool.graph.base import hidden_name
+from rostool.interfaces.names import hidden_name
 
 
 @click.group()

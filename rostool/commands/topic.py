@@ -106,7 +106,7 @@ def list_topics(
       rostool --ros2 topic list -t          # /chatter [std_msgs/msg/String]
       rostool --ros2 topic list -c -a
     """
-    from rostool.graph.base import hidden_name
+    from rostool.interfaces.names import hidden_name
 
     with live_graph(ctx) as graph:
         topics = graph.topics()
@@ -236,7 +236,7 @@ def type_(ctx: click.Context, name: str, include_hidden: bool) -> None:
     Example:
       rostool topic type /hello_world      # std_msgs/String
     """
-    from rostool.graph.base import hidden_name
+    from rostool.interfaces.names import hidden_name
 
     with live_graph(ctx) as graph:
         found = graph.topic_type(name)
@@ -260,8 +260,7 @@ def find(ctx: click.Context, type_name: str, count_topics: bool, include_hidden:
     Example:
       rostool topic find std_msgs/String
     """
-    from rostool.graph.base import hidden_name
-    from rostool.interfaces.names import to_store_name
+    from rostool.interfaces.names import hidden_name, to_store_name
 
     with live_graph(ctx) as graph:
         ros2 = graph.style == "ros2"

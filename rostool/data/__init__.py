@@ -17,8 +17,8 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from rostool.bag.typestores import DEFAULT_DISTRO
 from rostool.errors import RostoolError
+from rostool.interfaces.typestores import DEFAULT_DISTRO
 
 __all__ = ["read_bag_table", "read_bag_tables", "read_bags"]
 

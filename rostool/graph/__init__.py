@@ -11,7 +11,6 @@ if TYPE_CHECKING:
     from rostool.graph.base import Graph
 
 DEFAULT_MASTER_URI = "http://localhost:11311"
-INTERFACES_ENV = "ROSTOOL_INTERFACES"
 
 
 def select_ros_version(explicit: int | None) -> int:
@@ -36,13 +35,6 @@ def _port_answers(host: str, port: int, timeout: float = 0.2) -> bool:
         return False
 
 
-def interface_paths_from_env() -> tuple[str, ...]:
-    """ROSTOOL_INTERFACES split as click splits it for --interfaces (at os.pathsep): verbs without the
-    option (topic echo) find custom types there too."""
-    value = os.environ.get(INTERFACES_ENV, "")
-    return tuple(p for p in value.split(os.pathsep) if p.strip())
-
-
 def selected_ros2_backend() -> str | None:
     """`--ros2-backend` of the running command (None outside the CLI or when not given)."""
     import click
@@ -62,6 +54,8 @@ def open_graph(
     for in `interface_paths` (default: ROSTOOL_INTERFACES), ROS_PACKAGE_PATH and the workspace. ROS 2 goes
     through rclpy or rostool's DDS as `ros2_backend` (default: --ros2-backend, ROSTOOL_ROS2_BACKEND, auto)
     chooses."""
+    from rostool.interfaces.sources import interface_paths_from_env
+
     version = select_ros_version(explicit_version)
     interface_paths = tuple(interface_paths) or interface_paths_from_env()
     if version == 2:

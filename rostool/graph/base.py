@@ -11,11 +11,6 @@ if TYPE_CHECKING:
     from rostool.graph.recording import Encoding, RecordSource
 
 
-def hidden_name(name: str) -> bool:
-    """ros2cli hides names with a token starting with `_` (e.g. actions' `/x/_action/send_goal`)."""
-    return any(token.startswith("_") for token in name.split("/"))
-
-
 @dataclass
 class TopicInfo:
     name: str

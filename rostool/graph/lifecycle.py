@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from rostool.errors import RostoolError
-from rostool.graph.base import hidden_name
+from rostool.interfaces.names import hidden_name
 
 GET_STATE = "lifecycle_msgs/srv/GetState"
 CHANGE_STATE = "lifecycle_msgs/srv/ChangeState"

@@ -2,7 +2,7 @@
 
 Types come from rosbags' store for ROS_DISTRO, rostool's built-in service and action definitions, and
 .msg/.srv/.action files in the interface sources (--interfaces, ROSTOOL_INTERFACES, ROS_PACKAGE_PATH,
-AMENT_PREFIX_PATH, the workspace around the current folder), through the ROS 2 graph's TypeSupport.
+AMENT_PREFIX_PATH, the workspace around the current folder), through the ROS 2 types (ros2_types.py).
 
 `ros2 interface show` prints the interface files as written. rosbags' store keeps no comments, blank lines
 or field defaults, so the text here is rebuilt from the parsed definition: what `ros2 interface show
@@ -23,7 +23,7 @@ from rostool.errors import RostoolError
 from rostool.interfaces.names import to_store_name
 
 if TYPE_CHECKING:
-    from rostool.graph.ros2.types import TypeSupport
+    from rostool.interfaces.ros2_types import Ros2Types
 
 KINDS = ("msg", "srv", "action")
 _EMPTY_MEMBER = "structure_needs_at_least_one_member"  # rosbags' stand-in member of an empty message
@@ -79,7 +79,7 @@ def _literal(value: Any) -> str:
     return str(value)
 
 
-def describe_ros2(types: TypeSupport, store_name: str, level: int = 0) -> list[str]:
+def describe_ros2(types: Ros2Types, store_name: str, level: int = 0) -> list[str]:
     """Constants, then fields (with source-file defaults), each nested type expanded one tab deeper."""
     if level > _MAX_DEPTH:
         raise RostoolError(f"{store_name} nests itself deeper than {_MAX_DEPTH} levels")
@@ -103,9 +103,9 @@ class Ros2Interfaces:
     """The ROS 2 types of one distro and set of interface sources, for show, list and hash."""
 
     def __init__(self, interface_paths: Sequence[str] = (), env: Mapping[str, str] = os.environ) -> None:
-        from rostool.graph.ros2.types import TypeSupport, distro_from_env
+        from rostool.interfaces.ros2_types import Ros2Types, distro_from_env
 
-        self.types = TypeSupport(distro_from_env(env), interface_paths)
+        self.types = Ros2Types(distro_from_env(env), interface_paths)
 
     # show
     def show_lines(self, type_name: str, default_kind: str = "msg") -> list[str]:
@@ -123,13 +123,13 @@ class Ros2Interfaces:
         return self.types.store_name(to_store_name(type_name.strip().strip("/")))
 
     def service_lines(self, type_name: str) -> list[str]:
-        from rostool.graph.ros2.services import register_service
+        from rostool.interfaces.ros2_srv import register_service
 
         request, response = register_service(self.types, type_name)
         return [*describe_ros2(self.types, request), "---", *describe_ros2(self.types, response)]
 
     def action_lines(self, type_name: str) -> list[str]:
-        from rostool.graph.ros2.actions import register_action
+        from rostool.interfaces.ros2_action import register_action
 
         found = register_action(self.types, type_name)
         lines: list[str] = []
@@ -142,8 +142,8 @@ class Ros2Interfaces:
     def raw_text(self, type_name: str, kind: str) -> str | None:
         """The definition as written (comments included): rostool's built-in text or the source file; None
         for types only rosbags' store has (it keeps no text)."""
-        from rostool.graph.ros2.actions import ACTION_DEFINITIONS, action_store_name
-        from rostool.graph.ros2.services import SRV_DEFINITIONS
+        from rostool.interfaces.ros2_action import ACTION_DEFINITIONS, action_store_name
+        from rostool.interfaces.ros2_srv import SRV_DEFINITIONS
 
         store_name = action_store_name(type_name) if kind == "action" else to_store_name(type_name, kind)
         built_in = {**SRV_DEFINITIONS, **ACTION_DEFINITIONS}.get(store_name)
@@ -164,8 +164,8 @@ class Ros2Interfaces:
     # list
     def names(self, kind: str) -> list[str]:
         """Every type of `kind` (msg, srv, action) known: the store, rostool's built-ins, source files."""
-        from rostool.graph.ros2.actions import ACTION_DEFINITIONS
-        from rostool.graph.ros2.services import SRV_DEFINITIONS
+        from rostool.interfaces.ros2_action import ACTION_DEFINITIONS
+        from rostool.interfaces.ros2_srv import SRV_DEFINITIONS
 
         built_in = {
             "msg": [n for n in self.types.store.fielddefs if "/msg/" in n],

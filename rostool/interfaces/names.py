@@ -17,3 +17,8 @@ def to_ros1_name(name: str) -> str:
     if len(parts) == 3:
         return f"{parts[0]}/{parts[2]}"
     return name
+
+
+def hidden_name(name: str) -> bool:
+    """ros2cli hides names with a token starting with `_` (e.g. actions' `/x/_action/send_goal`)."""
+    return any(token.startswith("_") for token in name.split("/"))

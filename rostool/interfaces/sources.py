@@ -51,6 +51,14 @@ _IGNORE_MARKERS = ("CATKIN_IGNORE", "COLCON_IGNORE", "AMENT_IGNORE")
 _CRAWL_DEPTH = 6
 _CRAWL_LIMIT = 20_000  # folders visited per root
 KINDS = ("msg", "srv", "action")
+INTERFACES_ENV = "ROSTOOL_INTERFACES"
+
+
+def interface_paths_from_env() -> tuple[str, ...]:
+    """ROSTOOL_INTERFACES split as click splits it for --interfaces (at os.pathsep): verbs without the
+    option (topic echo) find custom types there too."""
+    value = os.environ.get(INTERFACES_ENV, "")
+    return tuple(p for p in value.split(os.pathsep) if p.strip())
 
 
 class InterfaceError(RostoolError):

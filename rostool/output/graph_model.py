@@ -1,19 +1,16 @@
 """The node/topic graph `rostool graph` and `rostool bag graph` draw, as rqt_graph shows it.
 
-Built from the `Graph` protocol only (node_names, topics, services, node_info for ROS 2 service clients),
-or from a bag's connections. Renderers (graph_text, graph_draw) take a `RosGraph` and never a backend.
+Built from the live graph (rostool.graph.topology) or from a bag's connections. Renderers (graph_text,
+graph_draw) take a `RosGraph` and never a backend.
 """
 
 from __future__ import annotations
 
 import re
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
-from rostool.graph.base import hidden_name
-
-if TYPE_CHECKING:
-    from rostool.graph.base import Graph
+from rostool.interfaces.names import hidden_name
 
 # what rqt_graph's "hide debug" and ros2cli leave out: logging, parameter events, our own probe node
 QUIET_TOPICS = frozenset({"/rosout", "/rosout_agg", "/parameter_events"})
@@ -73,30 +70,6 @@ def quiet_topic(name: str) -> bool:
 
 def quiet_service(name: str) -> bool:
     return hidden_name(name) or name.rsplit("/", 1)[-1] in HOUSEKEEPING_SERVICES
-
-
-def collect(graph: Graph, services: bool = False, show_all: bool = False, ns: str | None = None) -> RosGraph:
-    """The live graph: every node, topic and (with `services`) service, filtered like rqt_graph."""
-    nodes = set(graph.node_names())
-    topics = [TopicEdges(t.name, t.type, sorted(t.publishers), sorted(t.subscribers)) for t in graph.topics()]
-    nodes.update(n for t in topics for n in (*t.publishers, *t.subscribers))
-    found_services: list[ServiceEdges] = []
-    if services:
-        found_services = [
-            ServiceEdges(name, kind, sorted(servers)) for name, kind, servers in graph.services()
-        ]
-        if graph.style == "ros2":
-            # ROS 2 endpoints say who calls a service; a ROS 1 master only knows servers, and asking
-            # every ROS 1 node over XML-RPC would not tell either
-            by_name = {s.name: s for s in found_services}
-            for node in sorted(nodes):
-                if quiet_node(node) and not show_all:
-                    continue
-                for name, kind in graph.node_info(node).service_clients:
-                    entry = by_name.setdefault(name, ServiceEdges(name, kind))
-                    entry.clients.append(node)
-            found_services = sorted(by_name.values(), key=lambda s: s.name)
-    return select(RosGraph(sorted(nodes), topics, found_services), show_all, ns)
 
 
 def select(full: RosGraph, show_all: bool = False, ns: str | None = None) -> RosGraph:

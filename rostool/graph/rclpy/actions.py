@@ -21,13 +21,14 @@ from rostool.graph.ros2.actions import (
     CANCEL_SERVICE,
     CANCEL_WAIT,
     ActionSummary,
-    ActionTypes,
     CancelingGoal,
     GoalEvent,
     GoalOutcome,
     GoalTimeout,
 )
 from rostool.graph.ros2.names import resolve
+from rostool.interfaces import ros2_action
+from rostool.interfaces.ros2_action import ActionTypes
 
 if TYPE_CHECKING:
     from rostool.graph.base import GoalWatcher
@@ -37,10 +38,10 @@ if TYPE_CHECKING:
 def register_action(graph: RclpyGraph, action_type: str) -> tuple[ActionTypes, Any]:
     """The action's store names (built in, from .action sources, else described from rclpy's classes) and
     the class rclpy imports."""
-    name = ros2_actions.action_store_name(action_type)
+    name = ros2_action.action_store_name(action_type)
     cls = rtypes.python_class(name)
     try:
-        found = ros2_actions.register_action(graph.types, name)
+        found = ros2_action.register_action(graph.types, name)
     except RostoolError:
         found = ActionTypes(name)
         for part in ("Goal", "Result", "Feedback", "FeedbackMessage", "SendGoal_Request", "SendGoal_Response",

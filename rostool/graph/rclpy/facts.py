@@ -21,7 +21,7 @@ def rclpy_distro(env: Mapping[str, str] = os.environ) -> tuple[str | None, str]:
     """(distro, where it was found): ROS_DISTRO, a pip-installed ros-<distro>-rclpy, or /opt/ros/<distro>."""
     from importlib import metadata
 
-    from rostool.bag.typestores import DISTROS
+    from rostool.interfaces.typestores import DISTROS
 
     named = env.get("ROS_DISTRO", "").strip().lower()
     if named:
@@ -99,7 +99,7 @@ def _dds_facts(env: Mapping[str, str]) -> dict[str, Any]:
     from importlib import metadata
 
     from rostool.graph.ros2 import dds
-    from rostool.graph.ros2.types import distro_from_env
+    from rostool.interfaces.ros2_types import distro_from_env
 
     try:
         cyclone = metadata.version("cyclonedds")

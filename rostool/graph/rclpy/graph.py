@@ -16,7 +16,7 @@ from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any, Literal
 
 from rostool.errors import RostoolError
-from rostool.graph.base import NodeInfo, Received, Subscription, TopicInfo, hidden_name
+from rostool.graph.base import NodeInfo, Received, Subscription, TopicInfo
 from rostool.graph.rclpy import types as rtypes
 from rostool.graph.rclpy.recording import BagVerbs
 from rostool.graph.rclpy.refusals import Refusals
@@ -24,12 +24,13 @@ from rostool.graph.rclpy.services import ServiceVerbs
 from rostool.graph.rclpy.verbs import ActionVerbs, ParameterVerbs
 from rostool.graph.ros2 import dds
 from rostool.graph.ros2.names import resolve
+from rostool.interfaces.names import hidden_name
 
 if TYPE_CHECKING:
     from rostool.graph.qos import QosRequest
     from rostool.graph.rclpy.context import RclpyContext
     from rostool.graph.recording import Encoding
-    from rostool.graph.ros2.types import TypeSupport
+    from rostool.interfaces.ros2_types import Ros2Types
 
 GRAPH_QUIET_SECONDS = 0.5
 # a direct listing (no daemon) answers no sooner than this: the participants that answer a newcomer's first
@@ -55,14 +56,14 @@ class RclpyGraph(ServiceVerbs, ParameterVerbs, ActionVerbs, BagVerbs, Refusals):
         anonymous: bool = True,
         interface_paths: Sequence[str] = (),
     ) -> None:
-        from rostool.bag.typestores import DEFAULT_DISTRO, DISTROS
         from rostool.graph.rclpy.facts import rclpy_distro
+        from rostool.interfaces.typestores import DEFAULT_DISTRO, DISTROS
 
         dds.domain_id()  # a bad ROS_DOMAIN_ID fails in one line before rcl sees it
         found = distro or rclpy_distro()[0]
         self._distro = found if found in DISTROS else DEFAULT_DISTRO
         self._interface_paths = tuple(interface_paths)
-        self._types: TypeSupport | None = None
+        self._types: Ros2Types | None = None
         self.qos_request = dds.QosRequest()
         self.warn: Callable[[str], None] = lambda text: print(f"WARNING: {text}", file=sys.stderr)
         base = node_name.strip("/")
@@ -75,12 +76,12 @@ class RclpyGraph(ServiceVerbs, ParameterVerbs, ActionVerbs, BagVerbs, Refusals):
         self._subscriptions: list[Any] = []
 
     @property
-    def types(self) -> TypeSupport:
+    def types(self) -> Ros2Types:
         """rosbags' store for the distro (made on first use: listing verbs never need it)."""
         if self._types is None:
-            from rostool.graph.ros2.types import TypeSupport
+            from rostool.interfaces.ros2_types import Ros2Types
 
-            self._types = TypeSupport(self._distro, self._interface_paths)
+            self._types = Ros2Types(self._distro, self._interface_paths)
         return self._types
 
     @property
@@ -328,7 +329,7 @@ def _type_hash(info: Any) -> str | None:
 
 
 class RclpyPublisher:
-    def __init__(self, topic: str, store_name: str, writer: Any, types: TypeSupport) -> None:
+    def __init__(self, topic: str, store_name: str, writer: Any, types: Ros2Types) -> None:
         self.topic = topic
         self.type_name = store_name
         self._writer = writer

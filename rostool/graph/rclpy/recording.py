@@ -10,8 +10,8 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
-from rostool.graph.base import hidden_name
 from rostool.graph.recording import Encoding, Put, subscribed_by
+from rostool.interfaces.names import hidden_name
 
 if TYPE_CHECKING:
     from rostool.graph.base import Received

@@ -27,7 +27,7 @@ _GONE_CHECK = 1.0  # a call without a reply checks this often that its server is
 def service_store_names(graph: RclpyGraph, srv_type: str) -> tuple[str, str, str]:
     """(`pkg/srv/Name`, its request and response names in rosbags' store) for `pkg/Name` or `pkg/srv/Name`
     (`pkg/action/X_SendGoal` too); the rclpy class must import."""
-    from rostool.graph.ros2.services import register_service
+    from rostool.interfaces.ros2_srv import register_service
 
     parts = srv_type.strip().strip("/").split("/")
     if len(parts) == 2:
@@ -157,7 +157,7 @@ class ServiceVerbs:
         return found
 
     def find_services(self: RclpyGraph, type_name: str) -> list[str]:
-        from rostool.graph.base import hidden_name
+        from rostool.interfaces.names import hidden_name
 
         pkg, _, name = type_name.strip().strip("/").rpartition("/")
         wanted = f"{pkg.removesuffix('/srv')}/srv/{name}"

@@ -28,13 +28,12 @@ from typing import TYPE_CHECKING, Any
 from rostool.errors import RostoolError
 from rostool.graph.base import ActionSummary
 from rostool.graph.ros2 import dds
-from rostool.graph.ros2.definitions import action_types
 from rostool.graph.ros2.names import resolve, topic_to_dds
 from rostool.graph.ros2.services import ServiceClient, remote_writer_known
+from rostool.interfaces.ros2_action import register_action
 
 if TYPE_CHECKING:
     from rostool.graph.ros2.graph import Ros2Graph, Session
-    from rostool.graph.ros2.types import TypeSupport
 
 ACTION_INFIX = "/_action/"
 FEEDBACK_QOS = dds.PROFILES["default"]
@@ -52,61 +51,9 @@ SUCCEEDED = 4
 CANCEL_ERRORS = {1: "the server rejected the cancel request", 2: "the server does not know the goal",
                  3: "the goal already finished"}  # fmt: skip
 
-ACTION_DEFINITIONS: dict[str, str] = {
-    "example_interfaces/action/Fibonacci": "int32 order\n---\nint32[] sequence\n---\nint32[] sequence\n",
-    "test_msgs/action/Fibonacci": "int32 order\n---\nint32[] sequence\n---\nint32[] sequence\n",
-}
-
 
 def status_name(status: int) -> str:
     return STATUS_NAMES.get(status, f"status {status}")
-
-
-def action_store_name(action_type: str) -> str:
-    """`pkg/Name` or `pkg/action/Name` -> `pkg/action/Name`."""
-    parts = action_type.strip().strip("/").split("/")
-    if len(parts) == 2 or (len(parts) == 3 and parts[1] == "action"):
-        return f"{parts[0]}/action/{parts[-1]}"
-    raise RostoolError(f"bad action type {action_type!r}: use pkg/action/Name (or pkg/Name)")
-
-
-@dataclass(frozen=True)
-class ActionTypes:
-    """Store names of one action's types."""
-
-    name: str  # pkg/action/Name
-
-    def part(self, suffix: str) -> str:
-        return f"{self.name}_{suffix}"
-
-    @property
-    def send_goal(self) -> str:
-        return self.part("SendGoal")
-
-    @property
-    def get_result(self) -> str:
-        return self.part("GetResult")
-
-    @property
-    def feedback_message(self) -> str:
-        return self.part("FeedbackMessage")
-
-
-def register_action(types: TypeSupport, action_type: str, text: str | None = None) -> ActionTypes:
-    """Make an action's goal, result, feedback and derived service/message types known to the store.
-
-    Looked up in order: the store, `text`, rostool's built-in definitions, then .action source files."""
-    name = action_store_name(action_type)
-    found = ActionTypes(name)
-    if types.in_store(found.feedback_message):
-        return found
-    text = text if text is not None else ACTION_DEFINITIONS.get(name)
-    if text is None:
-        if types.knows(found.feedback_message):
-            return found
-        raise types.unknown("action", name, sorted(ACTION_DEFINITIONS))
-    types.register(action_types(name, text, f"the definition of {name}"))
-    return found
 
 
 def split_action_service(service: str) -> tuple[str, str] | None:

@@ -34,8 +34,9 @@ from rostool.graph.ros2.discovery import (
 )
 from rostool.graph.ros2.names import resolve, service_type, topic_to_dds, type_to_dds
 from rostool.graph.ros2.protocol import Ros2Verbs
-from rostool.graph.ros2.types import TypeSupport, distro_from_env, gid_size
+from rostool.graph.ros2.types import TypeSupport, gid_size
 from rostool.graph.ros2_calls import ServiceEndpoint, service_info_facts
+from rostool.interfaces.ros2_types import distro_from_env
 
 if TYPE_CHECKING:
     from rostool.graph.recording import Encoding

@@ -7,10 +7,10 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from rostool.errors import RostoolError
-from rostool.graph.base import hidden_name
 from rostool.graph.recording import Encoding, Put, subscribed_by
 from rostool.graph.ros2 import actions, dds, params
 from rostool.graph.ros2_calls import call_service
+from rostool.interfaces.names import hidden_name
 
 if TYPE_CHECKING:
     from rostool.graph.base import GoalWatcher, Received

@@ -125,7 +125,7 @@ class TypeResolver:
         self.unknown: set[str] = set()
         self._from_builtin: set[str] = set()
         self._stored = stored
-        self._sources: Any = None  # rostool.graph.ros2.definitions.SourceDefinitions, made when needed
+        self._sources: Any = None  # rostool.interfaces.definitions.SourceDefinitions, made when needed
         for msgtype in sorted(set(msgtypes)):
             typs = self._stored_types_for(msgtype, stored)
             if typs is not None:
@@ -157,8 +157,8 @@ class TypeResolver:
         """A type neither stored nor built in, from the .msg/.srv files the live verbs read:
         ROSTOOL_INTERFACES (--interfaces), ROS_PACKAGE_PATH, the workspace around the current folder and
         AMENT_PREFIX_PATH's share/ (a sourced ROS 2 has its packages' interface files there)."""
-        from rostool.graph import interface_paths_from_env
-        from rostool.graph.ros2.definitions import SourceDefinitions
+        from rostool.interfaces.definitions import SourceDefinitions
+        from rostool.interfaces.sources import interface_paths_from_env
 
         if self._sources is None:
             self._sources = SourceDefinitions(interface_paths_from_env())
