@@ -10,7 +10,6 @@ import errno
 import importlib
 import os
 import sys
-from dataclasses import dataclass
 
 import click
 
@@ -52,14 +51,6 @@ COMMANDS: dict[str, tuple[str, str, str]] = {
         "Search the ROS 1 / ROS 2 / rostool command reference.",
     ),
 }
-
-
-@dataclass
-class Settings:
-    """Options given before the verb, shared with every command through click's context."""
-
-    ros_version: int | None = None
-    ros2_backend: str | None = None  # auto | rclpy | dds; None: ROSTOOL_ROS2_BACKEND, else auto
 
 
 class LazyGroup(click.Group):
@@ -150,6 +141,8 @@ def root(ctx: click.Context, ros_version: int | None, ros2_backend: str | None) 
       rostool param get /rosdistro
       rostool bag info test.bag
     """
+    from rostool.commands._common import Settings
+
     ctx.obj = Settings(ros_version=ros_version, ros2_backend=ros2_backend)
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import sys
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Literal
 
 import click
@@ -13,12 +14,30 @@ if TYPE_CHECKING:
     from rostool.graph.base import Graph
 
 
-def ros_version(ctx: click.Context) -> int | None:
+@dataclass
+class Settings:
+    """Options given before the verb (`rostool --ros2 --ros2-backend dds ...`): the one context object every
+    command reads through `settings(ctx)`."""
+
+    ros_version: int | None = None
+    ros2_backend: str | None = None  # auto | rclpy | dds; None: ROSTOOL_ROS2_BACKEND, else auto
+
+
+def settings(ctx: click.Context) -> Settings:
     root = ctx.find_root()
-    if root.obj is None:  # shell completion parses the root's options without running its callback
-        value = root.params.get("ros_version")
-        return value if value in (1, 2) else None
-    return getattr(root.obj, "ros_version", None)
+    if isinstance(root.obj, Settings):
+        return root.obj
+    # shell completion (and a command invoked alone) parses the root's options without running its callback
+    version = root.params.get("ros_version")
+    return Settings(version if version in (1, 2) else None, root.params.get("ros2_backend"))
+
+
+def ros_version(ctx: click.Context) -> int | None:
+    return settings(ctx).ros_version
+
+
+def ros2_backend(ctx: click.Context) -> str | None:
+    return settings(ctx).ros2_backend
 
 
 def interface_style(ctx: click.Context, type_name: str = "") -> Literal["ros1", "ros2"]:
@@ -28,12 +47,28 @@ def interface_style(ctx: click.Context, type_name: str = "") -> Literal["ros1", 
     return "ros2" if ros2_selected(ros_version(ctx), type_name) else "ros1"
 
 
+def open_live_graph(
+    ctx: click.Context, interface_paths: Sequence[str] = (), node_name: str = "rostool"
+) -> Graph:
+    """The live graph the root options select; through the graph daemon unless the verb's `--no-daemon`."""
+    from rostool.graph import open_graph
+
+    no_daemon = any(c.params.get("no_daemon") for c in _contexts(ctx))
+    return open_graph(
+        ros_version(ctx), node_name, interface_paths, ros2_backend(ctx), use_daemon=not no_daemon
+    )
+
+
+def _contexts(ctx: click.Context | None) -> Iterator[click.Context]:
+    while ctx is not None:
+        yield ctx
+        ctx = ctx.parent
+
+
 @contextmanager
 def live_graph(ctx: click.Context, interface_paths: Sequence[str] = ()) -> Iterator[Graph]:
     """The selected live graph, always closed (unregistered) on the way out, Ctrl+C included."""
-    from rostool.graph import open_graph
-
-    graph = open_graph(ros_version(ctx), interface_paths=interface_paths)
+    graph = open_live_graph(ctx, interface_paths)
     try:
         yield graph
     finally:

@@ -6,7 +6,7 @@ from typing import TYPE_CHECKING, Any
 
 import click
 
-from rostool.commands._common import json_option, print_json
+from rostool.commands._common import json_option, print_json, ros2_backend
 from rostool.errors import RostoolError
 
 if TYPE_CHECKING:
@@ -14,11 +14,9 @@ if TYPE_CHECKING:
 
 
 def _client() -> DaemonClient:
-    from rostool.graph import selected_ros2_backend
-    from rostool.graph.daemon.client import DaemonClient
-    from rostool.graph.rclpy.select import requested
+    from rostool.graph import daemon_client
 
-    return DaemonClient(requested(selected_ros2_backend())[0])
+    return daemon_client(ros2_backend(click.get_current_context()))
 
 
 @click.group()

@@ -7,7 +7,7 @@ from typing import Any
 
 import click
 
-from rostool.commands._common import json_option, print_json, ros_version
+from rostool.commands._common import json_option, print_json, ros2_backend, ros_version
 
 
 @click.command("doctor")
@@ -23,15 +23,13 @@ def doctor(ctx: click.Context, as_json: bool) -> None:
       rostool --ros2-backend rclpy doctor --json
     """
     from rostool.errors import RostoolError
-    from rostool.graph import select_ros_version, selected_ros2_backend
-    from rostool.graph.rclpy import facts
-    from rostool.graph.rclpy.select import choose
+    from rostool.graph import ros2_report, select_ros_version
 
     explicit = ros_version(ctx)
     version = select_ros_version(explicit)
     report: dict[str, Any] = {"ros_version": version, "ros_version_from": _version_source(explicit, version)}
     try:
-        report["ros2"] = facts.report(choose(selected_ros2_backend()))
+        report["ros2"] = ros2_report(ros2_backend(ctx))
     except RostoolError as err:  # the backend asked for cannot serve: say so, and why, as a graph verb would
         report["ros2"] = {"backend": None, "error": str(err)}
     if as_json:

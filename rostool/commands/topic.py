@@ -777,7 +777,8 @@ def pub(
       rostool topic pub /status book_msgs/Status "{level: 2}" --interfaces ~/catkin_ws -1
       rostool --ros2 topic pub -t 5 -w 1 /chatter std_msgs/msg/String "{data: hi}"
     """
-    from rostool.graph import open_graph, select_ros_version
+    from rostool.commands._common import open_live_graph
+    from rostool.graph import select_ros_version
     from rostool.graph.publishing import publish_loop
 
     if n_value is not None:
@@ -789,7 +790,7 @@ def pub(
             raise RostoolError(f"-n takes a number of messages (at least 1), not {n_value!r}")
     if from_stdin:
         values = (sys.stdin.read(),)
-    graph = open_graph(ros_version(ctx), node_name=node_name or "rostool", interface_paths=interface_paths)
+    graph = open_live_graph(ctx, interface_paths, node_name or "rostool")
     try:
         graph.use_qos(qos)
         say: Callable[[str], None] = (lambda _t: None) if quiet else click.echo

@@ -5,10 +5,11 @@ from __future__ import annotations
 import os
 import socket
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from rostool.graph.base import Graph
+    from rostool.graph.daemon.client import DaemonClient
 
 DEFAULT_MASTER_URI = "http://localhost:11311"
 
@@ -35,40 +36,31 @@ def _port_answers(host: str, port: int, timeout: float = 0.2) -> bool:
         return False
 
 
-def selected_ros2_backend() -> str | None:
-    """`--ros2-backend` of the running command (None outside the CLI or when not given)."""
-    import click
-
-    ctx = click.get_current_context(silent=True)
-    settings = ctx.find_root().obj if ctx is not None else None
-    return getattr(settings, "ros2_backend", None)
-
-
 def open_graph(
     explicit_version: int | None,
     node_name: str = "rostool",
     interface_paths: Sequence[str] = (),
     ros2_backend: str | None = None,
+    use_daemon: bool = True,
 ) -> Graph:
     """Connect to the live graph of the selected ROS version. Types missing from the built-in ones are looked
     for in `interface_paths` (default: ROSTOOL_INTERFACES), ROS_PACKAGE_PATH and the workspace. ROS 2 goes
-    through rclpy or rostool's DDS as `ros2_backend` (default: --ros2-backend, ROSTOOL_ROS2_BACKEND, auto)
-    chooses."""
+    through rclpy or rostool's DDS as `ros2_backend` (default: ROSTOOL_ROS2_BACKEND, else auto) chooses,
+    and through the user's graph daemon unless `use_daemon` is false or ROSTOOL_NO_DAEMON=1."""
     from rostool.interfaces.sources import interface_paths_from_env
 
     version = select_ros_version(explicit_version)
     interface_paths = tuple(interface_paths) or interface_paths_from_env()
     if version == 2:
-        backend = ros2_backend or selected_ros2_backend()
 
         def direct() -> Graph:
-            return _ros2_graph(backend, node_name, interface_paths)
+            return _ros2_graph(ros2_backend, node_name, interface_paths)
 
-        if not daemon_wanted():
+        if not (use_daemon and daemon_allowed()):
             return direct()
         from rostool.graph.daemon.graph import daemon_graph
 
-        return daemon_graph(backend, direct)
+        return daemon_graph(ros2_backend, direct)
     from rostool.graph.ros1.graph import Ros1Graph
 
     return Ros1Graph(node_name, interface_paths)
@@ -86,14 +78,24 @@ def _ros2_graph(backend: str | None, node_name: str, interface_paths: Sequence[s
     return Ros2Graph(node_name, interface_paths=interface_paths)
 
 
-def daemon_wanted() -> bool:
-    """Whether ROS 2 graph queries may go through the user's graph daemon: not with ROSTOOL_NO_DAEMON=1
-    nor with the running verb's `--no-daemon` (ros2cli's flag, which the verbs accept)."""
+def daemon_allowed() -> bool:
+    """Whether ROS 2 graph queries may go through the user's graph daemon: not with ROSTOOL_NO_DAEMON=1."""
     from rostool.graph.daemon import NO_DAEMON_ENV
 
-    if os.environ.get(NO_DAEMON_ENV, "").strip() not in ("", "0"):
-        return False
-    import click
+    return os.environ.get(NO_DAEMON_ENV, "").strip() in ("", "0")
 
-    ctx = click.get_current_context(silent=True)
-    return not (ctx is not None and ctx.params.get("no_daemon"))
+
+def daemon_client(ros2_backend: str | None) -> DaemonClient:
+    """The client of the user's graph daemon for the backend asked for (`rostool daemon` verbs)."""
+    from rostool.graph.daemon.client import DaemonClient
+    from rostool.graph.rclpy.select import requested
+
+    return DaemonClient(requested(ros2_backend)[0])
+
+
+def ros2_report(ros2_backend: str | None) -> dict[str, Any]:
+    """What `rostool doctor` says of ROS 2: the backend chosen and why, rclpy, RMW, distro, discovery."""
+    from rostool.graph.rclpy import facts
+    from rostool.graph.rclpy.select import choose
+
+    return facts.report(choose(ros2_backend))
