@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
+import functools
 import sys
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Literal
@@ -164,3 +165,31 @@ def _load(spec: str) -> click.Command:
     module, _, attribute = spec.partition(":")
     command: click.Command = getattr(importlib.import_module(module), attribute)
     return command
+
+
+def ignored_ros2_options(*names: str) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
+    """ros2cli options that have no meaning for rostool: accepted, said so in --help, and ignored."""
+    choices = {
+        "no_daemon": click.option("--no-daemon", is_flag=True,
+                                  help="Ask the ROS 2 graph directly, not its daemon (ROSTOOL_NO_DAEMON=1)."),
+        "spin_time": click.option("--spin-time", type=float, metavar="S",
+                                  help="Accepted and ignored (ros2cli: discovery wait; rostool waits for "
+                                  "discovery to settle itself)."),
+        "use_sim_time": click.option("-s", "--use-sim-time", is_flag=True,
+                                     help="ROS 2: accepted and ignored (rostool uses the wall clock)."),
+        "wall_time": click.option("--wall-time", is_flag=True,
+                                  help="Accepted and ignored (rostool always measures wall time)."),
+    }  # fmt: skip
+
+    def decorate(func: Callable[..., Any]) -> Callable[..., Any]:
+        @functools.wraps(func)
+        def wrapper(*args: Any, **kwargs: Any) -> Any:
+            for name in names:
+                kwargs.pop(name, None)
+            return func(*args, **kwargs)
+
+        for name in reversed(names):
+            wrapper = choices[name](wrapper)
+        return wrapper
+
+    return decorate

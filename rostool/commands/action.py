@@ -10,9 +10,8 @@ from typing import Any
 
 import click
 
-from rostool.commands._common import json_option, live_graph, print_json
+from rostool.commands._common import ignored_ros2_options, json_option, live_graph, print_json
 from rostool.commands.srv import interfaces_option
-from rostool.commands.topic import ignored_ros2_options
 from rostool.errors import RostoolError
 
 _TYPE_NAME = re.compile(r"[A-Za-z][\w]*/(action/)?[A-Za-z]\w*\Z")

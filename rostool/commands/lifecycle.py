@@ -8,8 +8,7 @@ from typing import Any, NoReturn
 import click
 from click.shell_completion import CompletionItem
 
-from rostool.commands._common import live_graph
-from rostool.commands.topic import ignored_ros2_options
+from rostool.commands._common import ignored_ros2_options, live_graph
 from rostool.errors import RostoolError
 from rostool.graph import lifecycle as lc
 

@@ -12,8 +12,7 @@ from typing import Any
 
 import click
 
-from rostool.commands._common import json_option, live_graph, print_json
-from rostool.commands.topic import ignored_ros2_options
+from rostool.commands._common import ignored_ros2_options, json_option, live_graph, print_json
 from rostool.errors import RostoolError
 from rostool.interfaces.names import hidden_name
 

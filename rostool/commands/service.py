@@ -9,11 +9,11 @@ from typing import Any
 
 import click
 
-from rostool.commands._common import json_option, live_graph, print_json
+from rostool.commands._common import ignored_ros2_options, json_option, live_graph, print_json
 from rostool.commands.srv import interfaces_option
-from rostool.commands.topic import ignored_ros2_options
 from rostool.errors import RostoolError
 from rostool.interfaces.names import hidden_name
+from rostool.output.repr_text import message_repr
 
 
 @click.group()
@@ -375,23 +375,3 @@ def _field_lookup(graph: Any) -> Any:
     from rostool.output.ros2_echo import fielddefs_lookup
 
     return fielddefs_lookup(getattr(getattr(graph.types, "store", None), "fielddefs", {}))
-
-
-def message_repr(value: Any, lookup: Any = None, desc: Any = None) -> str:
-    """A message as rclpy's repr shows it: `pkg.srv.Name_Request(a=1, b=2)`; with the type store's field
-    lookup, `byte` fields print as bytes (b'\\x00') as rclpy's do."""
-    from rostool.output.plain import is_message, message_fields
-
-    if is_message(value):
-        msgtype = getattr(value, "__msgtype__", type(value).__name__)
-        descs = (lookup(msgtype) if lookup else None) or {}
-        fields = ", ".join(f"{k}={message_repr(v, lookup, descs.get(k))}" for k, v in message_fields(value))
-        return f"{msgtype.replace('/', '.')}({fields})"
-    if hasattr(value, "tolist"):
-        value = value.tolist()
-    if isinstance(value, (list, tuple)):
-        element = desc[1][0] if desc is not None and desc[0] in (3, 4) else None  # array, sequence
-        return "[" + ", ".join(message_repr(v, lookup, element) for v in value) + "]"
-    if isinstance(value, int) and desc is not None and desc[0] == 1 and desc[1][0] == "byte":
-        return repr(bytes([value]))
-    return repr(value)

@@ -13,6 +13,7 @@ import click
 
 from rostool.commands._common import (
     ExtensibleGroup,
+    ignored_ros2_options,
     interfaces_option,
     json_option,
     live_graph,
@@ -42,34 +43,6 @@ def topic() -> None:
       rostool --ros2 topic list -t
       rostool --ros2 topic pub -t 3 /chatter std_msgs/msg/String "{data: hi}"
     """
-
-
-def ignored_ros2_options(*names: str) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
-    """ros2cli options that have no meaning for rostool: accepted, said so in --help, and ignored."""
-    choices = {
-        "no_daemon": click.option("--no-daemon", is_flag=True,
-                                  help="Ask the ROS 2 graph directly, not its daemon (ROSTOOL_NO_DAEMON=1)."),
-        "spin_time": click.option("--spin-time", type=float, metavar="S",
-                                  help="Accepted and ignored (ros2cli: discovery wait; rostool waits for "
-                                  "discovery to settle itself)."),
-        "use_sim_time": click.option("-s", "--use-sim-time", is_flag=True,
-                                     help="ROS 2: accepted and ignored (rostool uses the wall clock)."),
-        "wall_time": click.option("--wall-time", is_flag=True,
-                                  help="Accepted and ignored (rostool always measures wall time)."),
-    }  # fmt: skip
-
-    def decorate(func: Callable[..., Any]) -> Callable[..., Any]:
-        @functools.wraps(func)
-        def wrapper(*args: Any, **kwargs: Any) -> Any:
-            for name in names:
-                kwargs.pop(name, None)
-            return func(*args, **kwargs)
-
-        for name in reversed(names):
-            wrapper = choices[name](wrapper)
-        return wrapper
-
-    return decorate
 
 
 include_hidden_option = click.option(
@@ -824,9 +797,9 @@ def _publish_ros2(
     wait_matching: int | None, max_wait: float | None, keep_alive: float, print_nth: int,
 ) -> None:  # fmt: skip
     """ros2 topic pub's loop: wait for subscriptions, publish at `rate` (`total` times or until Ctrl+C)."""
-    from rostool.commands.service import message_repr
     from rostool.graph.publishing import MATCH_WAIT_SECONDS
     from rostool.interfaces.values import message_args
+    from rostool.output.repr_text import message_repr
 
     raw = _auto_values(message_args(values))
     text = repr(raw)
