@@ -7,7 +7,7 @@ from types import FrameType
 
 import click
 
-from rostool.graph.ros1.master import DEFAULT_HOST, DEFAULT_PORT, Master
+from rostool.graph import MASTER_HOST, MASTER_PORT, embedded_master
 
 
 @click.command(
@@ -22,13 +22,13 @@ Examples:
 @click.option(
     "--port",
     type=click.IntRange(0, 65535),
-    default=DEFAULT_PORT,
+    default=MASTER_PORT,
     show_default=True,
     help="TCP port to serve (0: any free port).",
 )
 @click.option(
     "--host",
-    default=DEFAULT_HOST,
+    default=MASTER_HOST,
     show_default=True,
     help="Address to listen on. The default serves this machine only; 0.0.0.0 serves every network "
     "interface and advertises ROS_HOSTNAME, ROS_IP or the host name.",
@@ -39,7 +39,7 @@ def core(port: int, host: str) -> None:
     Sets /rosdistro ($ROS_DISTRO, else noetic), /rosversion and /run_id as roscore does, and serves
     until Ctrl+C or SIGTERM. Nodes, rostool and the ROS 1 tools find it through ROS_MASTER_URI.
     """
-    master = Master(host, port)
+    master = embedded_master(host, port)
     received: list[int] = []
 
     def on_signal(signum: int, _frame: FrameType | None) -> None:

@@ -66,9 +66,9 @@ def stop(every: bool) -> None:
       rostool daemon stop
       rostool daemon stop --all
     """
-    from rostool.graph.daemon.client import every_daemon
+    from rostool.graph import every_daemon_client
 
-    clients = every_daemon() if every else [_client()]
+    clients = every_daemon_client() if every else [_client()]
     stopped = [client for client in clients if client.stop()]
     click.echo("The daemon has been stopped" if stopped else "The daemon is not running")
 

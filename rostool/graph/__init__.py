@@ -10,8 +10,12 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:
     from rostool.graph.base import Graph
     from rostool.graph.daemon.client import DaemonClient
+    from rostool.graph.ros1.master import Master
 
 DEFAULT_MASTER_URI = "http://localhost:11311"
+# where `rostool core` listens unless told (this machine only); graph/ros1/master.py's own defaults
+MASTER_PORT = 11311
+MASTER_HOST = "127.0.0.1"
 
 
 def select_ros_version(explicit: int | None) -> int:
@@ -91,6 +95,20 @@ def daemon_client(ros2_backend: str | None) -> DaemonClient:
     from rostool.graph.rclpy.select import requested
 
     return DaemonClient(requested(ros2_backend)[0])
+
+
+def every_daemon_client() -> list[DaemonClient]:
+    """Clients of every graph daemon of this user (all domains and keys): `rostool daemon stop --all`."""
+    from rostool.graph.daemon.client import every_daemon
+
+    return every_daemon()
+
+
+def embedded_master(host: str, port: int) -> Master:
+    """A ROS 1 master and parameter server run inside rostool (`rostool core`)."""
+    from rostool.graph.ros1.master import Master
+
+    return Master(host, port)
 
 
 def ros2_report(ros2_backend: str | None) -> dict[str, Any]:
