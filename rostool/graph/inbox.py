@@ -14,6 +14,7 @@ import threading
 import time
 from collections import deque
 from collections.abc import Callable, Iterator
+from typing import Any
 
 from rostool.errors import RostoolError
 from rostool.graph.base import Graph, Received, Subscription
@@ -100,3 +101,13 @@ class Inbox:
 def _size(item: Received | str) -> int:
     payload = getattr(item, "payload", None)
     return len(payload) if payload is not None else 0
+
+
+def decoded(received: Received, topic: str) -> Any:
+    """The message, or one RostoolError line when a peer sent bytes that do not match its own type."""
+    try:
+        return received.decode()
+    except RostoolError:
+        raise
+    except Exception as err:
+        raise RostoolError(f"cannot decode a {received.type_name} message on {topic}: {err}") from err

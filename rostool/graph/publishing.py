@@ -1,9 +1,11 @@
-"""`topic pub`: build messages from YAML and publish them once, latched, or at a steady rate."""
+"""`topic pub`: build messages from YAML and publish them once, latched, or at a steady rate (rostopic pub's
+loop), or at a rate a number of times after waiting for subscriptions (ros2 topic pub's)."""
 
 from __future__ import annotations
 
 import time
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -65,16 +67,7 @@ def publish_loop(
     if once:
         total = len(messages)
     say(f"publishing {type_name} on {topic}" + (f" at {rate:g} Hz" if rate else ""))
-    # Absolute scheduling: each message has its own due time, so the rate never drifts.
-    start = time.perf_counter()
-    sent = 0
-    while total is None or sent < total:
-        due = start + sent * period
-        delay = due - time.perf_counter()
-        if delay > 0:
-            time.sleep(delay)
-        publisher.publish(messages[sent % len(messages)])
-        sent += 1
+    _paced(period, total, lambda sent: publisher.publish(messages[sent % len(messages)]))
     if latched or once:
         _linger(graph, publisher, min(ONCE_LATCH_SECONDS, 1.0))
 
@@ -93,3 +86,82 @@ def _wait_for_known_subscribers(graph: Graph, publisher: Any, seconds: float) ->
     except RostoolError:  # nobody else in the graph (ROS 2: no participant answered)
         return
     publisher.wait_for_subscribers(wanted, max(0.0, deadline - time.monotonic()))
+
+
+def _paced(period: float, total: int | None, publish: Callable[[int], None]) -> None:
+    """publish(0), publish(1), ... (`total` times, or until Ctrl+C), one every `period` seconds.
+
+    Absolute scheduling: each message has its own due time, so the rate never drifts."""
+    start = time.perf_counter()
+    sent = 0
+    while total is None or sent < total:
+        delay = start + sent * period - time.perf_counter()
+        if delay > 0:
+            time.sleep(delay)
+        publish(sent)
+        sent += 1
+
+
+@dataclass(frozen=True)
+class Ros2Publication:
+    """ros2 topic pub's loop: `total` messages (None: until Ctrl+C) at `rate` Hz, after `wait_matching`
+    subscriptions matched (at most `max_wait` s), staying up `keep_alive` s after the last."""
+
+    rate: float
+    total: int | None
+    wait_matching: int | None
+    max_wait: float | None
+    keep_alive: float
+
+
+def publish_ros2(
+    graph: Graph,
+    topic: str,
+    type_name: str,
+    values: tuple[str, ...],
+    plan: Ros2Publication,
+    say: Callable[[str], None],
+    on_sent: Callable[[int, Any], None] | None,
+) -> None:
+    """ros2 topic pub: wait for subscriptions, publish at the rate; `on_sent(count, message)` after each
+    message (when given, "publisher: beginning loop" is said first)."""
+    raw = _auto_values(message_args(values))
+    rebuild = "now" in repr(raw)  # a stamp of `now` is taken again for every message
+    message = graph.build_message(type_name, raw)
+    publisher = graph.publisher(topic, type_name, latch=False)
+    if plan.wait_matching:
+        deadline = None if plan.max_wait is None else time.monotonic() + plan.max_wait
+        wait = 0.0
+        while not publisher.wait_for_subscribers(plan.wait_matching, wait):  # ros2's line, once a second
+            if deadline is not None and time.monotonic() >= deadline:
+                raise RostoolError(f"timed out waiting for {plan.wait_matching} matching subscription(s)")
+            say(f"Waiting for at least {plan.wait_matching} matching subscription(s)...")
+            wait = 1.0
+    elif plan.total is not None:
+        # a volatile subscriber gets nothing published before it matched: wait for the ones discovery shows
+        _wait_for_known_subscribers(graph, publisher, MATCH_WAIT_SECONDS)
+    if on_sent is not None:
+        say("publisher: beginning loop")
+
+    def publish(sent: int) -> None:
+        nonlocal message
+        if rebuild and sent:
+            message = graph.build_message(type_name, raw)
+        publisher.publish(message)
+        if on_sent is not None:
+            on_sent(sent + 1, message)
+
+    _paced(1.0 / plan.rate, plan.total, publish)
+    time.sleep(plan.keep_alive)
+
+
+def _auto_values(value: Any) -> Any:
+    """ros2 topic pub's `header: auto` (stamp now, empty frame) as rostool's `stamp: now`."""
+    if isinstance(value, dict):
+        return {
+            k: {"stamp": "now"} if k == "header" and v == "auto" else _auto_values(v)
+            for k, v in value.items()
+        }
+    if isinstance(value, list):
+        return [_auto_values(v) for v in value]
+    return value

@@ -9,7 +9,12 @@ from __future__ import annotations
 import math
 import threading
 from collections import deque
+from collections.abc import Mapping
 from dataclasses import dataclass
+
+from rostool.output.rate_text import format_bytes
+
+__all__ = ["RateMeter", "RunningStats", "SizeMeter", "Summary", "format_bytes", "fresh_rates"]
 
 
 @dataclass
@@ -103,10 +108,17 @@ class SizeMeter:
         return (total / elapsed if elapsed > 0 else 0.0), summary
 
 
-def format_bytes(value: float) -> str:
-    """rostopic bw style: B, KB, MB with two decimals."""
-    if value < 1000:
-        return f"{value:.2f}B"
-    if value < 1_000_000:
-        return f"{value / 1000:.2f}KB"
-    return f"{value / 1_000_000:.2f}MB"
+def fresh_rates(
+    meters: Mapping[str, RateMeter], printed: dict[str, int]
+) -> list[tuple[str, float, Summary, int]]:
+    """(topic, rate, gap statistics, messages counted) of each topic that got messages since its last report;
+    `printed` (topic -> messages counted at its last report) is updated."""
+    rows = []
+    for topic_name, meter in meters.items():
+        summary = meter.summary()
+        if summary is None or printed.get(topic_name) == meter.total:
+            continue
+        printed[topic_name] = meter.total
+        rate = 1.0 / summary.mean if summary.mean > 0 else 0.0
+        rows.append((topic_name, rate, summary, meter.total))
+    return rows

@@ -72,6 +72,7 @@ def plot(
       rostool topic plot /imu/linear_acceleration --duration 20 -o accel.png
       rostool --ros2 topic plot /chatter_count/data --csv > counts.csv
     """
+    from rostool.graph.inbox import decoded
     from rostool.output.plot_data import Sampler, csv_header, csv_row, parse_spec
     from rostool.output.plot_deps import need
     from rostool.output.plot_draw import check_output
@@ -105,13 +106,7 @@ def plot(
                 rows = []
                 while arrived:
                     received = arrived.popleft()
-                    try:
-                        message = received.decode()
-                    except RostoolError:
-                        raise
-                    except Exception as err:  # a peer sent bytes that do not match its own type
-                        raise RostoolError(f"cannot decode a {received.type_name} message on "
-                                           f"{received.topic}: {err}") from err  # fmt: skip
+                    message = decoded(received, received.topic)
                     rows += sampler.add(received.topic, message, received.recv_time_ns)
                 if as_csv and rows:
                     sys.stdout.write("".join(csv_row(*row) + "\n" for row in rows))
