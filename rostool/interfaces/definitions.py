@@ -29,7 +29,8 @@ from yaml import YAMLError, safe_load
 
 import rostool.interfaces.rosbags_fix  # noqa: F401 - must run before types are registered
 from rostool.errors import RostoolError
-from rostool.interfaces.sources import InterfaceError, Interfaces, SourceRoot, default_roots
+from rostool.interfaces.msgspec import InterfaceError
+from rostool.interfaces.sources import Interfaces, SourceRoot, default_roots
 
 Typesdict = dict[str, Any]  # rosbags' {store name: (constants, fields)}
 

@@ -21,7 +21,7 @@ import threading
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, TypeVar, cast
 
 from rosbags.interfaces import Nodetype
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
@@ -31,27 +31,26 @@ if TYPE_CHECKING:
     from rosbags.typesys.store import Typestore
 
 import rostool.interfaces.rosbags_fix  # noqa: F401 - must run before types are registered
-from rostool.errors import RostoolError
+from rostool.interfaces.describe import describe
+from rostool.interfaces.msgspec import (
+    ACTION_SUFFIXES,
+    BUILTIN_TYPES,
+    InterfaceError,
+    MsgSpec,
+    load_action_specs,
+    parse_msg,
+    parse_srv,
+)
 from rostool.interfaces.names import to_ros1_name, to_store_name
 from rostool.interfaces.ros1 import Ros1Type, builtin_store
 
-PRIMITIVE_TYPES = frozenset(
-    {"int8", "uint8", "int16", "uint16", "int32", "uint32", "int64", "uint64",
-     "float32", "float64", "string", "bool", "char", "byte"}
-)  # fmt: skip
-BUILTIN_TYPES = PRIMITIVE_TYPES | {"time", "duration"}
-_BITS = {"int8": 8, "uint8": 8, "int16": 16, "uint16": 16, "int32": 32, "uint32": 32,
-         "int64": 64, "uint64": 64, "byte": 8, "char": 8}  # fmt: skip
-_RESOURCE = re.compile(r"[A-Za-z][\w/]*\Z", re.ASCII)
-_BASE_NAME = re.compile(r"[A-Za-z]\w*\Z", re.ASCII)
-_ARRAY = re.compile(r"(\[\d*\])*\Z")
-_ROSBAGS_CONSTANT = re.compile(r"[A-Z](?:_?[A-Z0-9]+)*\Z")  # rosbags' grammar; others are skipped there
 _SEPARATOR = "=" * 80
 _IGNORE_MARKERS = ("CATKIN_IGNORE", "COLCON_IGNORE", "AMENT_IGNORE")
 _CRAWL_DEPTH = 6
 _CRAWL_LIMIT = 20_000  # folders visited per root
 KINDS = ("msg", "srv", "action")
 INTERFACES_ENV = "ROSTOOL_INTERFACES"
+T = TypeVar("T")
 
 
 def interface_paths_from_env() -> tuple[str, ...]:
@@ -59,157 +58,6 @@ def interface_paths_from_env() -> tuple[str, ...]:
     option (topic echo) find custom types there too."""
     value = os.environ.get(INTERFACES_ENV, "")
     return tuple(p for p in value.split(os.pathsep) if p.strip())
-
-
-class InterfaceError(RostoolError):
-    """A definition that cannot be used: malformed text (with file:line) or a type found nowhere."""
-
-
-# --- parsing ------------------------------------------------------------------------------------------
-@dataclass(frozen=True)
-class Field:
-    type: str  # as genmsg resolves it: builtins as written, `Header` -> std_msgs/Header, `T` -> pkg/T
-    name: str
-
-    @property
-    def base_type(self) -> str:
-        return self.type.split("[", 1)[0]
-
-
-@dataclass(frozen=True)
-class Constant:
-    type: str
-    name: str
-    value_text: str
-
-
-@dataclass(frozen=True)
-class MsgSpec:
-    """One message definition: what genmsg's MsgSpec holds, plus where it came from."""
-
-    name: str  # pkg/Type
-    text: str
-    constants: tuple[Constant, ...]
-    fields: tuple[Field, ...]
-    origin: str
-
-    @property
-    def package(self) -> str:
-        return self.name.split("/", 1)[0]
-
-    def depends(self) -> list[str]:
-        """Nested message types in field order, each once."""
-        found: list[str] = []
-        for field in self.fields:
-            base = field.base_type
-            if base not in BUILTIN_TYPES and base not in found:
-                found.append(base)
-        return found
-
-    def md5_text(self, md5_of: Callable[[str], str]) -> str:
-        lines = [f"{c.type} {c.name}={c.value_text}" for c in self.constants]
-        for field in self.fields:
-            base = field.base_type
-            lines.append(f"{field.type if base in BUILTIN_TYPES else md5_of(base)} {field.name}")
-        return "\n".join(lines).strip()
-
-    def rosbags_text(self) -> str:
-        """The definition with every type spelled in full, for rosbags' parser."""
-        lines = [
-            f"{c.type} {c.name}={c.value_text}" for c in self.constants if _ROSBAGS_CONSTANT.match(c.name)
-        ]
-        lines.extend(f"{f.type} {f.name}" for f in self.fields)
-        return "\n".join(lines) + "\n"
-
-
-NumberedLines = Sequence[tuple[int, str]]  # (1-based line number in the file, 0 when generated; text)
-
-
-def numbered(text: str, first: int = 1) -> list[tuple[int, str]]:
-    return [(first + index, line) for index, line in enumerate(text.split("\n"))]
-
-
-def parse_msg(text: str, name: str, origin: str, lines: NumberedLines | None = None) -> MsgSpec:
-    """Parse .msg text with genmsg's rules; problems raise InterfaceError naming `origin:line`."""
-    package = name.split("/", 1)[0]
-    constants: list[Constant] = []
-    fields: list[Field] = []
-    for number, line in lines if lines is not None else numbered(text):
-        clean = line.split("#", 1)[0].strip()
-        if not clean:
-            continue
-        try:
-            if "=" in clean:
-                constants.append(_constant(line, clean))
-            else:
-                fields.append(_field(clean, package))
-                if any(f.name == fields[-1].name for f in fields[:-1]):
-                    raise ValueError(f"field {fields[-1].name!r} is declared twice in {name}")
-        except ValueError as err:
-            raise InterfaceError(f"{_where(origin, number)}: {err}") from None
-    return MsgSpec(name, text, tuple(constants), tuple(fields), origin)
-
-
-def _where(origin: str, number: int) -> str:
-    return f"{origin}:{number}" if number else origin
-
-
-def _field(clean: str, package: str) -> Field:
-    parts = clean.split()
-    if len(parts) != 2:
-        raise ValueError(f"expected `TYPE NAME` (or `TYPE NAME=VALUE` for a constant), got {clean!r}")
-    field_type, name = parts
-    if not _BASE_NAME.match(name):
-        raise ValueError(f"{name!r} is not a legal field name (a letter, then letters, digits or _)")
-    base = field_type.split("[", 1)[0]
-    if not _RESOURCE.match(base) or base.count("/") > 1 or not _ARRAY.match(field_type[len(base) :]):
-        raise ValueError(f"{field_type!r} is not a legal field type (like int32, pkg/Type or Type[3])")
-    if "/" not in base:
-        if base == "Header":
-            field_type = "std_msgs/" + field_type
-        elif base not in BUILTIN_TYPES:
-            field_type = f"{package}/{field_type}"
-    return Field(field_type, name)
-
-
-def _constant(line: str, clean: str) -> Constant:
-    parts = clean.split()
-    const_type = parts[0]
-    if const_type not in PRIMITIVE_TYPES:
-        raise ValueError(f"{const_type!r} cannot be a constant type (only numbers, bool and string)")
-    if const_type == "string":  # everything right of `=` is the value, `#` included
-        name = line[line.find(" ") + 1 : line.find("=")].strip()
-        value = line[line.find("=") + 1 :].strip()
-    else:
-        pieces = [p.strip() for p in " ".join(parts[1:]).split("=")]
-        if len(pieces) != 2:
-            raise ValueError(f"invalid constant declaration {clean!r}")
-        name, value = pieces
-        _check_constant_value(const_type, value)
-    if not _BASE_NAME.match(name):
-        raise ValueError(f"{name!r} is not a legal constant name")
-    return Constant(const_type, name, value)
-
-
-def _check_constant_value(const_type: str, value: str) -> None:
-    if const_type in ("float32", "float64"):
-        try:
-            float(value)
-        except ValueError:
-            raise ValueError(f"constant value {value!r} is not a {const_type}") from None
-    elif const_type == "bool":
-        if value not in ("True", "False", "true", "false", "1", "0"):
-            raise ValueError(f"constant value {value!r} is not a bool (True or False)")
-    else:
-        try:
-            number = int(value)
-        except ValueError:
-            raise ValueError(f"constant value {value!r} is not an integer") from None
-        bits = _BITS[const_type]
-        low, high = (0, 2**bits - 1) if const_type[0] == "u" or const_type == "char" else (
-            -(2 ** (bits - 1)), 2 ** (bits - 1) - 1)  # fmt: skip
-        if not low <= number <= high:
-            raise ValueError(f"constant value {number} does not fit a {const_type} ({low}..{high})")
 
 
 # --- finding packages ---------------------------------------------------------------------------------
@@ -311,9 +159,6 @@ def default_roots(paths: Sequence[str | Path] = (), cwd: Path | None = None) -> 
 
 
 # --- the catalog --------------------------------------------------------------------------------------
-ACTION_SUFFIXES = ("ActionGoal", "ActionResult", "ActionFeedback", "Action", "Goal", "Result", "Feedback")
-
-
 class Interfaces:
     """Message, service and action types from the sources above; thread-safe, caches what it parses."""
 
@@ -327,7 +172,7 @@ class Interfaces:
         self._hashing: set[str] = set()
         self._store: Typestore = get_typestore(Stores.EMPTY)
         self._types: dict[str, Ros1Type] = {}
-        self.memo: dict[tuple[str, str], object] = {}  # services and actions built from these types
+        self._built: dict[tuple[str, str], Any] = {}  # services and actions made from these types
 
     # discovery
     def packages(self) -> dict[str, list[Path]]:
@@ -390,6 +235,15 @@ class Interfaces:
             where = "; ".join(f"{r.label} {r.path}" for r in self.roots)
         return f"{where}; built-in ROS 1 types"
 
+    def built(self, kind: str, name: str, make: Callable[[Path | None], T]) -> T:
+        """The service or action type `name` (`kind` srv or action), made once by `make(its source file
+        or None)`."""
+        key = (kind, name)
+        if key not in self._built:
+            package, _, short = name.partition("/")
+            self._built[key] = make(self.find_file(package, kind, short))
+        return cast("T", self._built[key])
+
     def not_found(self, kind: str, name: str) -> InterfaceError:
         package, _, short = name.partition("/")
         dirs = self.packages().get(package, [])
@@ -416,23 +270,19 @@ class Interfaces:
         package, _, short = name.partition("/")
         path = self.find_file(package, "msg", short)
         if path is not None:
-            text = _read(path)
-            return parse_msg(text, name, str(path))
+            return parse_msg(read_source(path), name, str(path))
         for suffix in ("Request", "Response"):  # the two halves of a .srv are messages too (as in genpy)
             base = short[: -len(suffix)]
-            if short.endswith(suffix) and base and self.find_file(package, "srv", base) is not None:
-                from rostool.interfaces.srv import load_service
-
-                load_service(self, f"{package}/{base}")
+            srv_path = self.find_file(package, "srv", base) if short.endswith(suffix) and base else None
+            if srv_path is not None:
+                request, response = parse_srv(read_source(srv_path), f"{package}/{base}", str(srv_path))
+                self.add_specs({request.name: request, response.name: response})
                 return self._specs.get(name)
         for suffix in ACTION_SUFFIXES:
             base = short[: -len(suffix)]
-            if short.endswith(suffix) and base and self.find_file(package, "action", base) is not None:
-                from rostool.interfaces.action import load_action_specs
-
-                path = self.find_file(package, "action", base)
-                assert path is not None
-                specs = load_action_specs(_read(path), f"{package}/{base}", str(path))
+            action_path = self.find_file(package, "action", base) if short.endswith(suffix) and base else None
+            if action_path is not None:
+                specs = load_action_specs(read_source(action_path), f"{package}/{base}", str(action_path))
                 self._specs.update(specs)
                 return specs[name]
         return None
@@ -560,8 +410,6 @@ class Interfaces:
         """The type as `rosmsg show` prints it: constants as written, fields, nested types indented."""
         spec = self.spec(name)
         if spec is None:
-            from rostool.interfaces.describe import describe
-
             store = builtin_store()
             if to_store_name(name) not in store.fielddefs:
                 raise self.not_found("msg", to_ros1_name(to_store_name(name)))
@@ -584,7 +432,7 @@ class Interfaces:
         return sorted(names)
 
 
-def _read(path: Path) -> str:
+def read_source(path: Path) -> str:
     try:
         return path.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as err:

@@ -10,9 +10,12 @@ import hashlib
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
-from rostool.interfaces.sources import InterfaceError, MsgSpec, parse_msg
+from rostool.interfaces.msgspec import InterfaceError, MsgSpec, parse_srv
+from rostool.interfaces.sources import read_source
 
 if TYPE_CHECKING:
+    from pathlib import Path
+
     from rostool.interfaces.ros1 import Ros1Type
     from rostool.interfaces.sources import Interfaces
 
@@ -26,7 +29,6 @@ BUILTIN_SRVS: dict[str, str] = {
     "roscpp/GetLoggers": "---\nLogger[] loggers\n",
     "roscpp/SetLoggerLevel": "string logger\nstring level\n---\n",
 }
-DELIMITER = "---"
 
 
 @dataclass(frozen=True)
@@ -51,27 +53,6 @@ class SrvType:
         return ", ".join(f"{field.name} ({field.type})" for field in self.request_spec.fields)
 
 
-def split_srv(text: str) -> tuple[list[tuple[int, str]], list[tuple[int, str]]]:
-    """Request and response lines (numbered), split as genmsg does: every line starting `---` switches."""
-    request: list[tuple[int, str]] = []
-    response: list[tuple[int, str]] = []
-    current = request
-    for number, line in enumerate(text.split("\n"), start=1):
-        if line.startswith(DELIMITER):
-            current = response
-        else:
-            current.append((number, line))
-    return request, response
-
-
-def parse_srv(text: str, name: str, origin: str) -> tuple[MsgSpec, MsgSpec]:
-    request, response = split_srv(text)
-    return (
-        parse_msg("".join(line + "\n" for _n, line in request), f"{name}Request", origin, request),
-        parse_msg("".join(line + "\n" for _n, line in response), f"{name}Response", origin, response),
-    )
-
-
 def service_type_name(name: str) -> str:
     """`pkg/Type` from `pkg/Type` or `pkg/srv/Type`."""
     parts = name.strip("/").split("/")
@@ -85,16 +66,12 @@ def service_type_name(name: str) -> str:
 def load_service(catalog: Interfaces, name: str) -> SrvType:
     """The service type `pkg/Type` from the sources (see sources.py), else the standard ones above."""
     name = service_type_name(name)
-    cached = catalog.memo.get(("srv", name))
-    if isinstance(cached, SrvType):
-        return cached
-    package, _, short = name.partition("/")
-    path = catalog.find_file(package, "srv", short)
+    return catalog.built("srv", name, lambda path: _make_service(catalog, name, path))
+
+
+def _make_service(catalog: Interfaces, name: str, path: Path | None) -> SrvType:
     if path is not None:
-        try:
-            text, origin = path.read_text(encoding="utf-8"), str(path)
-        except (OSError, UnicodeDecodeError) as err:
-            raise InterfaceError(f"cannot read {path}: {err}") from err
+        text, origin = read_source(path), str(path)
     elif name in BUILTIN_SRVS:
         text, origin = BUILTIN_SRVS[name], f"built-in {name}.srv"
     else:
@@ -102,7 +79,7 @@ def load_service(catalog: Interfaces, name: str) -> SrvType:
     request, response = parse_srv(text, name, origin)
     catalog.add_specs({request.name: request, response.name: response})
     md5_text = request.md5_text(catalog.md5) + response.md5_text(catalog.md5)
-    found = SrvType(
+    return SrvType(
         name,
         hashlib.md5(md5_text.encode()).hexdigest(),
         catalog.message(request.name),
@@ -112,8 +89,6 @@ def load_service(catalog: Interfaces, name: str) -> SrvType:
         text,
         origin,
     )
-    catalog.memo[("srv", name)] = found
-    return found
 
 
 def service_names(catalog: Interfaces) -> list[str]:

@@ -81,22 +81,21 @@ def select(full: RosGraph, show_all: bool = False, ns: str | None = None) -> Ros
     kept = set(nodes)
     topics = []
     for topic in full.topics:
-        if not show_all and quiet_topic(topic.name):
-            continue
-        pubs = [n for n in topic.publishers if n in kept]
-        subs = [n for n in topic.subscribers if n in kept]
+        pubs, subs = _within(kept, topic.publishers, topic.subscribers)
         inside = ns is not None and in_namespace(topic.name, ns)
-        if pubs or subs or inside:
+        if (show_all or not quiet_topic(topic.name)) and (pubs or subs or inside):
             topics.append(TopicEdges(topic.name, topic.type, pubs, subs))
     found_services = []
     for service in full.services:
-        if not show_all and quiet_service(service.name):
-            continue
-        servers = [n for n in service.servers if n in kept]
-        clients = [n for n in service.clients if n in kept]
-        if servers or clients:
+        servers, clients = _within(kept, service.servers, service.clients)
+        if (show_all or not quiet_service(service.name)) and (servers or clients):
             found_services.append(ServiceEdges(service.name, service.type, servers, clients))
     return RosGraph(nodes, topics, found_services)
+
+
+def _within(kept: set[str], *ends: list[str]) -> list[list[str]]:
+    """Each end's nodes (publishers, subscribers...) that are among `kept`, in their order."""
+    return [[n for n in names if n in kept] for names in ends]
 
 
 def from_bag(reader: Any) -> RosGraph:

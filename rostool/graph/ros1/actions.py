@@ -13,10 +13,11 @@ import queue
 import threading
 import time
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from rostool.errors import RostoolError
+from rostool.graph.base import ActionSummary
 from rostool.graph.ros1.names import resolve
 from rostool.interfaces.action import (
     SUCCEEDED,
@@ -28,7 +29,7 @@ from rostool.interfaces.action import (
 )
 
 if TYPE_CHECKING:
-    from rostool.graph.ros1.graph import Ros1Graph
+    from rostool.graph.ros1.core import Ros1Core
     from rostool.graph.ros1.topics import InboundLink, Subscription
     from rostool.interfaces.ros1 import Ros1Type
     from rostool.interfaces.sources import Interfaces
@@ -40,42 +41,36 @@ WAIT_NOTICE = 2.0  # say that we are waiting for the server after this long
 _goal_numbers = itertools.count(1)
 
 
-@dataclass
-class ActionSummary:
-    name: str
-    type: str | None
-    servers: list[str] = field(default_factory=list)
-    clients: list[str] = field(default_factory=list)
+class _Status:
+    """A goal status code (actionlib_msgs/GoalStatus) and its name."""
+
+    status: int
+
+    @property
+    def status_name(self) -> str:
+        return status_name(self.status)
 
 
 @dataclass(frozen=True)
-class GoalState:
+class GoalState(_Status):
     id: str
     status: int
     text: str
 
-    @property
-    def status_name(self) -> str:
-        return status_name(self.status)
-
 
 @dataclass
-class GoalEvent:
+class GoalEvent(_Status):
     kind: str  # "feedback", "status" or "result"
     status: int
     text: str = ""
     message: Any = None  # the feedback or result message
-
-    @property
-    def status_name(self) -> str:
-        return status_name(self.status)
 
 
 class GoalTimeout(RostoolError):
     pass
 
 
-def list_actions(graph: Ros1Graph) -> list[ActionSummary]:
+def list_actions(graph: Ros1Core) -> list[ActionSummary]:
     """Every namespace that has all five action topics, with its type, servers and clients."""
     publishers, subscribers, _services = graph.master.system_state()
     pubs = {str(t): sorted(nodes) for t, nodes in publishers}
@@ -106,7 +101,7 @@ def _type_from_topics(ns: str, types: dict[str, str]) -> str | None:
     return None
 
 
-def action_summary(graph: Ros1Graph, name: str) -> ActionSummary:
+def action_summary(graph: Ros1Core, name: str) -> ActionSummary:
     ns = resolve(name)
     for summary in list_actions(graph):
         if summary.name == ns:
@@ -115,7 +110,7 @@ def action_summary(graph: Ros1Graph, name: str) -> ActionSummary:
                        "(see `rostool action list`)")  # fmt: skip
 
 
-def goal_states(graph: Ros1Graph, name: str, wait: float = 2.0) -> list[GoalState] | None:
+def goal_states(graph: Ros1Core, name: str, wait: float = 2.0) -> list[GoalState] | None:
     """The goals the server reports on NS/status (None when no status arrives within `wait`)."""
     arrived: queue.Queue[Any] = queue.Queue()
     status_type = graph.types.builtin("actionlib_msgs/GoalStatusArray")
@@ -128,9 +123,7 @@ def goal_states(graph: Ros1Graph, name: str, wait: float = 2.0) -> list[GoalStat
     return [GoalState(s.goal_id.id, int(s.status), s.text) for s in message.status_list]
 
 
-def resolve_action_type(
-    graph: Ros1Graph, catalog: Interfaces, name: str, type_name: str | None
-) -> ActionType:
+def resolve_action_type(graph: Ros1Core, catalog: Interfaces, name: str, type_name: str | None) -> ActionType:
     """The action type given, or the one the master knows for NS/goal (pkg/XActionGoal -> pkg/X)."""
     ns = resolve(name)
     _publishers, subscribers, _services = graph.master.system_state()
@@ -159,7 +152,7 @@ def new_goal_id(now_ns: int | None = None) -> str:
 class ActionClient:
     """One client of one action server, with the five topics set up on the graph's node."""
 
-    def __init__(self, graph: Ros1Graph, name: str, action: ActionType) -> None:
+    def __init__(self, graph: Ros1Core, name: str, action: ActionType) -> None:
         self.ns = resolve(name)
         self.action = action
         self.graph = graph
@@ -339,7 +332,7 @@ class GoalOutcome:
 
 
 def send_goal(
-    graph: Ros1Graph,
+    graph: Ros1Core,
     catalog: Interfaces,
     name: str,
     type_name: str | None,
@@ -379,7 +372,7 @@ def send_goal(
     raise RostoolError(f"goal {goal_id} ended without a result")
 
 
-def cancel_goals(graph: Ros1Graph, name: str, goal_id: str, wait: float = 3.0) -> int:
+def cancel_goals(graph: Ros1Core, name: str, goal_id: str, wait: float = 3.0) -> int:
     """Publish one cancel on NS/cancel (goal_id '' cancels every goal); returns the listeners reached."""
     from rostool.interfaces.fill import build_message
 

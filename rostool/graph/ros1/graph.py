@@ -1,178 +1,161 @@
-"""The Graph interface over a ROS 1 master, with a native node that registers on first need."""
+"""The Graph protocol over a ROS 1 master: `Ros1Core`'s nodes and topics, with services (services.py),
+actions (actions.py), the parameter server (parameters.py) and bag play and record as thin wrappers."""
 
 from __future__ import annotations
 
-import contextlib
-import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
+from functools import partial
 from typing import TYPE_CHECKING, Any, Literal
 
 from rostool.errors import RostoolError
-from rostool.graph.base import Connection, NodeInfo, Publisher, Received, Subscription, TopicInfo
-from rostool.graph.ros1 import env
-from rostool.graph.ros1.master_client import MasterClient, RemoteError, Unreachable, call
-from rostool.graph.ros1.names import anonymous, resolve
-from rostool.graph.ros1.node import Node
-from rostool.graph.ros1.protocol import Ros1Verbs
-from rostool.graph.ros1.topics import InboundLink
-from rostool.interfaces.ros1 import Ros1Type, TypeRegistry
+from rostool.graph.recording import Encoding, Put, RecordSource, subscribed_by
+from rostool.graph.ros1 import actions, services
+from rostool.graph.ros1.core import Ros1Core
+from rostool.graph.ros1.parameters import ServerParameters
+from rostool.interfaces.msgspec import InterfaceError
+from rostool.interfaces.srv import load_service
 
 if TYPE_CHECKING:
-    from rostool.graph.recording import Encoding
+    from rostool.graph.base import ActionSummary, GoalWatcher
+    from rostool.graph.qos import QosRequest
+    from rostool.graph.ros1.topics import Publisher
+    from rostool.interfaces.ros1 import Ros1Type
 
 
-class Ros1Graph(Ros1Verbs):
-    """Read-only verbs use the master alone; subscribing or publishing starts a node lazily."""
-
+class Ros1Graph(Ros1Core):
     ros_version = 1
     style: Literal["ros1", "ros2"] = "ros1"
     encoding: Encoding = "ros1"
 
-    def __init__(self, node_name: str = "rostool", interface_paths: Sequence[str] = ()) -> None:
-        self.interface_paths = tuple(interface_paths)
-        self._node_name = node_name
-        self._node: Node | None = None
-        self.types = TypeRegistry()
-        self.master = MasterClient(env.master_uri(), anonymous(node_name))
+    def use_qos(self, qos: QosRequest) -> None:
+        if qos.given:
+            raise RostoolError("--qos-* options apply to ROS 2 graphs only: ROS 1 topics have no QoS")
 
-    @property
-    def node(self) -> Node:
-        if self._node is None:
-            self.master.get_pid()  # one clear "cannot reach the master" error before binding anything
-            self._node = Node(self._node_name, anonymous=True)
-        return self._node
+    def topic_endpoints(self, name: str) -> list[dict[str, Any]]:
+        raise RostoolError("topic endpoints with GIDs and QoS exist on ROS 2 graphs only")
 
-    def __enter__(self) -> Ros1Graph:
-        return self
+    # --- bag play and record ------------------------------------------------------------------
+    def raw_publisher(self, topic: str, wire_type: Ros1Type, latch: bool = False) -> Publisher:
+        return self.node.advertise(topic, wire_type, latch)
 
-    def __exit__(self, *_exc: object) -> None:
-        self.close()
+    def record_source(self, warn: Callable[[str], None], include_hidden: bool = False) -> RecordSource:
+        if include_hidden:
+            raise RostoolError("--include-hidden-topics applies to ROS 2 graphs only (ROS 1 hides no topics)")
+        return Ros1Source(self)
+
+    # --- services -----------------------------------------------------------------------------
+    def services(self) -> list[tuple[str, str | None, list[str]]]:
+        """(name, None, server nodes): the master does not know types, asking each server would."""
+        return [(name, None, nodes) for name, nodes in services.services(self.master)]
+
+    def service_type(self, name: str) -> str:
+        return services.service_info(self.master, name).type
+
+    def service_uri(self, name: str) -> str:
+        return services.lookup(self.master, name)
+
+    def service_nodes(self, name: str) -> list[str]:
+        resolved = self.resolve(name)
+        nodes = next((n for s, _type, n in self.services() if s == resolved), None)
+        if not nodes:
+            raise RostoolError(
+                f"unknown service {resolved}: no node provides it (see `rostool service list`)"
+            )
+        return nodes
+
+    def service_args(self, name: str) -> str:
+        uri = services.lookup(self.master, name)
+        return services.service_type(self.master, self.catalog(), name, uri).request_args()
+
+    def service_info(self, name: str) -> dict[str, Any]:
+        """rosservice info's facts; `args` is None when no .srv of the type is found."""
+        found = services.service_info(self.master, name)
+        try:
+            args: list[str] | None = load_service(self.catalog(), found.type).request_args().split()
+        except InterfaceError:
+            args = None
+        return {"name": found.name, "node": found.node, "uri": found.uri, "type": found.type,
+                "md5sum": found.md5sum, "args": args}  # fmt: skip
+
+    def find_services(self, type_name: str) -> list[str]:
+        found = []
+        for name, _type, _nodes in self.services():
+            try:
+                header = services.probe(name, services.lookup(self.master, name), self.master.caller_id)
+            except RostoolError:
+                continue  # a service that vanished or does not answer is not a match
+            if header.get("type") == type_name:
+                found.append(name)
+        return found
+
+    def service_call(
+        self, name: str, values: tuple[str, ...], wait: bool = False, timeout: float | None = None
+    ) -> tuple[Any, Any]:
+        return services.call(self.master, self.catalog(), name, values, wait=wait, timeout=timeout)
+
+    # --- actions ------------------------------------------------------------------------------
+    def actions(self) -> list[ActionSummary]:
+        return actions.list_actions(self)
+
+    def action_info(self, name: str, wait: float) -> dict[str, Any]:
+        """The action's summary and the goals its server reports (None: no status within `wait`)."""
+        summary = actions.action_summary(self, name)
+        goals = actions.goal_states(self, summary.name, wait)
+        return {**vars(summary), "goals": None if goals is None else
+                [{"id": g.id, "status": g.status_name, "text": g.text} for g in goals]}  # fmt: skip
+
+    def send_goal(
+        self, name: str, kind: str | None, goal: Any, timeout: float | None, watcher: GoalWatcher
+    ) -> actions.GoalOutcome:
+        return actions.send_goal(
+            self, self.catalog(), name, kind, goal, timeout,
+            on_event=watcher.event, on_sent=watcher.sent, on_waiting=watcher.waiting,
+        )  # fmt: skip
+
+    def cancel_goals(self, name: str, goal_id: str | None) -> list[Any]:
+        """Publish the cancel; actionlib servers do not answer which goals it reached."""
+        actions.cancel_goals(self, name, goal_id or "")
+        return []
+
+    # --- parameters ---------------------------------------------------------------------------
+    def parameters(self, node: str | None, timeout: float = 5.0) -> ServerParameters:
+        return ServerParameters(self, node)
+
+
+class Ros1Source:
+    """`bag record`'s source: raw TCPROS subscriptions (md5 `*`), bytes stored with the publisher's own
+    connection header."""
+
+    encoding: Encoding = "ros1"
+
+    def __init__(self, graph: Ros1Graph) -> None:
+        self.graph = graph
+        self.types = graph.types
+        self.store = None
+        self.resolve = graph.resolve
+
+    def published_topics(self) -> list[str]:
+        try:
+            return list(self.graph.master.published_topics())
+        except RostoolError:
+            return []  # the master is away: keep recording what is subscribed (as rosbag does)
+
+    def subscribed_topics(self, node: str) -> list[str]:
+        return subscribed_by(self.graph, node)
+
+    def subscribe(self, topic: str, put: Put) -> None:
+        self.graph.node.subscribe(topic, partial(put, topic))
+
+    def describe(self, topic: str, origin: Any) -> dict[str, str]:
+        header = origin.header
+        return {
+            "topic": topic,
+            "type": header.get("type", "*"),
+            "md5sum": header.get("md5sum", "*"),
+            "message_definition": header.get("message_definition", ""),
+            "callerid": header.get("callerid", origin.publisher_uri),
+            "latching": header.get("latching", "0"),
+        }
 
     def close(self) -> None:
-        if self._node is not None:
-            self._node.close()
-            self._node = None
-
-    def resolve(self, name: str) -> str:
-        return resolve(name)
-
-    # --- nodes --------------------------------------------------------------------------------
-    def node_names(self) -> list[str]:
-        publishers, subscribers, services = self.master.system_state()
-        names = {n for group in (publishers, subscribers, services) for _name, nodes in group for n in nodes}
-        return sorted(names)
-
-    def node_uri(self, name: str) -> str:
-        name = resolve(name)
-        try:
-            return self.master.lookup_node(name)
-        except RemoteError as err:
-            raise RostoolError(f"unknown node {name}: it is not registered with the master") from err
-
-    def node_info(self, name: str) -> NodeInfo:
-        name = resolve(name)
-        uri = self.node_uri(name)
-        publishers, subscribers, services = self.master.system_state()
-        types = self.master.topic_types()
-        pubs = [(t, types.get(t, "?")) for t, nodes in publishers if name in nodes]
-        subs = [(t, types.get(t, "?")) for t, nodes in subscribers if name in nodes]
-        srvs = sorted(s for s, nodes in services if name in nodes)
-        pid: int | None = None
-        connections: list[Connection] = []
-        try:
-            pid = int(call(uri, "getPid", self.master.caller_id, what=f"node {name}", timeout=3))
-            bus = call(uri, "getBusInfo", self.master.caller_id, what=f"node {name}", timeout=3)
-            for entry in bus:
-                _cid, peer, direction, transport, topic = entry[:5]
-                if len(entry) > 5 and not entry[5]:
-                    continue  # not connected (yet): rosnode leaves these out too
-                connections.append(
-                    Connection(topic, peer, "outbound" if direction == "o" else "inbound", transport)
-                )
-        except (Unreachable, RemoteError):
-            pid = None
-        return NodeInfo(name, uri, pid, sorted(pubs), sorted(subs), srvs, connections)
-
-    def ping(self, name: str) -> float:
-        uri = self.node_uri(name)
-        start = time.perf_counter()
-        try:
-            call(uri, "getPid", self.master.caller_id, what=f"node {resolve(name)}", timeout=3)
-        except Unreachable as err:
-            raise RostoolError(f"node {resolve(name)} does not answer at {uri}: {err}") from err
-        return (time.perf_counter() - start) * 1000.0
-
-    def kill(self, name: str) -> None:
-        uri = self.node_uri(name)
-        # A node often closes its server while answering; like rosnode, that counts as killed.
-        with contextlib.suppress(Unreachable, RemoteError):
-            call(uri, "shutdown", self.master.caller_id, "user request", what=f"node {name}", timeout=3)
-
-    # --- topics -------------------------------------------------------------------------------
-    def topics(self) -> list[TopicInfo]:
-        publishers, subscribers, _services = self.master.system_state()
-        types = self.master.topic_types()
-        found: dict[str, TopicInfo] = {}
-        for topic, nodes in publishers:
-            found.setdefault(topic, TopicInfo(topic, types.get(topic, "?"))).publishers.extend(sorted(nodes))
-        for topic, nodes in subscribers:
-            found.setdefault(topic, TopicInfo(topic, types.get(topic, "?"))).subscribers.extend(sorted(nodes))
-        return [found[name] for name in sorted(found)]
-
-    def topic_type(self, name: str) -> str | None:
-        return self.master.topic_types().get(resolve(name))
-
-    def subscribe(
-        self,
-        topic: str,
-        on_message: Callable[[Received], None],
-        on_error: Callable[[str], None] | None = None,
-    ) -> Subscription:
-        resolved = resolve(topic)
-        registry = self.types
-        decoders: dict[int, Callable[[bytes], Any]] = {}
-
-        def decoder_for(link: InboundLink) -> Callable[[bytes], Any]:
-            header = link.header
-
-            def decode(payload: bytes) -> Any:
-                msg_type = registry.resolve(
-                    header.get("type", "*"), header.get("md5sum", "*"), header.get("message_definition")
-                )
-                decoders[link.id] = msg_type.deserialize
-                return msg_type.deserialize(payload)
-
-            return decode
-
-        clock = time.time_ns
-
-        def deliver(payload: bytes, link: InboundLink) -> None:
-            decoder = decoders.get(link.id) or decoders.setdefault(link.id, decoder_for(link))
-            on_message(Received(resolved, payload, clock(), link.header.get("type", "*"), decoder))
-
-        return self.node.subscribe(resolved, deliver, on_error=on_error)
-
-    def publisher(self, topic: str, type_name: str, latch: bool = False) -> Publisher:
-        resolved = resolve(topic)
-        msg_type = self.wire_type(type_name)
-        existing = self.topic_type(resolved)
-        if existing and existing not in (msg_type.name, "*"):
-            raise RostoolError(
-                f"topic {resolved} already has type {existing}; cannot publish {msg_type.name} on it"
-            )
-        return self.node.advertise(resolved, msg_type, latch)
-
-    def wire_type(self, type_name: str) -> Ros1Type:
-        """A type to publish: from .msg files in the source trees first, then the built-in store."""
-        from rostool.interfaces.sources import interfaces
-
-        return interfaces(self.interface_paths).message(type_name)
-
-    def message_class(self, type_name: str) -> type:
-        return self.wire_type(type_name).message_class()
-
-    def build_message(self, type_name: str, value: Any) -> Any:
-        from rostool.interfaces.fill import build_message
-
-        msg_type = self.wire_type(type_name)
-        return build_message(msg_type.store, msg_type.store_name, value)
+        self.graph.close()

@@ -126,9 +126,7 @@ class MasterApi:
 
     @_api(0, 2)
     def subscribeParam(self, caller_id: str, caller_api: Any, key: Any) -> Reply:
-        caller_api = names.api_arg(caller_api, "caller_api")
-        key = names.resolve(names.key_arg(key), caller_id)
-        sub_key = key if key == SEP else names.canonicalize(key) + SEP
+        caller_api, key, sub_key = _param_subscription_args(caller_id, caller_api, key)
         with self.lock:
             try:
                 value = self.params.get(sub_key)
@@ -139,9 +137,7 @@ class MasterApi:
 
     @_api(0, 2)
     def unsubscribeParam(self, caller_id: str, caller_api: Any, key: Any) -> Reply:
-        caller_api = names.api_arg(caller_api, "caller_api")
-        key = names.resolve(names.key_arg(key), caller_id)
-        sub_key = key if key == SEP else names.canonicalize(key) + SEP
+        caller_api, key, sub_key = _param_subscription_args(caller_id, caller_api, key)
         with self.lock:
             self.registry.unregister(Kind.PARAM_SUBSCRIPTION, sub_key, caller_id, caller_api)
         # rosmaster answers 1 whether or not the caller was subscribed.
@@ -189,9 +185,7 @@ class MasterApi:
 
     @_api([], 3)
     def registerSubscriber(self, caller_id: str, topic: Any, topic_type: Any, caller_api: Any) -> Reply:
-        topic = names.topic_arg(topic, caller_id, "topic")
-        topic_type = names.type_arg(topic_type)
-        caller_api = names.api_arg(caller_api, "caller_api")
+        topic, topic_type, caller_api = _endpoint_args(caller_id, topic, caller_api, topic_type)
         with self.lock:
             self._register(Kind.SUBSCRIPTION, topic, caller_id, caller_api)
             # A subscriber may give the type of a topic nobody declared yet, but never '*'.
@@ -202,16 +196,11 @@ class MasterApi:
 
     @_api(0, 2)
     def unregisterSubscriber(self, caller_id: str, topic: Any, caller_api: Any) -> Reply:
-        topic = names.topic_arg(topic, caller_id, "topic")
-        caller_api = names.api_arg(caller_api, "caller_api")
-        with self.lock:
-            return self.registry.unregister(Kind.SUBSCRIPTION, topic, caller_id, caller_api)
+        return self._unregister_endpoint(Kind.SUBSCRIPTION, caller_id, topic, caller_api)
 
     @_api([], 3)
     def registerPublisher(self, caller_id: str, topic: Any, topic_type: Any, caller_api: Any) -> Reply:
-        topic = names.topic_arg(topic, caller_id, "topic")
-        topic_type = names.type_arg(topic_type)
-        caller_api = names.api_arg(caller_api, "caller_api")
+        topic, topic_type, caller_api = _endpoint_args(caller_id, topic, caller_api, topic_type)
         with self.lock:
             self._register(Kind.PUBLICATION, topic, caller_id, caller_api)
             if topic_type != ANY_TYPE or topic not in self.registry.topic_types:
@@ -222,12 +211,14 @@ class MasterApi:
 
     @_api(0, 2)
     def unregisterPublisher(self, caller_id: str, topic: Any, caller_api: Any) -> Reply:
-        topic = names.topic_arg(topic, caller_id, "topic")
-        caller_api = names.api_arg(caller_api, "caller_api")
+        return self._unregister_endpoint(Kind.PUBLICATION, caller_id, topic, caller_api)
+
+    def _unregister_endpoint(self, kind: Kind, caller_id: str, topic: Any, caller_api: Any) -> Reply:
+        topic, _type, caller_api = _endpoint_args(caller_id, topic, caller_api)
         with self.lock:
-            reply = self.registry.unregister(Kind.PUBLICATION, topic, caller_id, caller_api)
-            if reply[2]:
-                self._notify_publishers(topic)
+            reply = self.registry.unregister(kind, topic, caller_id, caller_api)
+            if kind == Kind.PUBLICATION and reply[2]:
+                self._notify_publishers(topic)  # its subscribers learn that a publisher left
         return reply
 
     # ----------------------------------------------------------------- graph state
@@ -287,6 +278,23 @@ class MasterApi:
             snapshot = copy_tree(update_value)
             for _caller_id, api in subscribers:
                 self.notifier.post(api, "paramUpdate", update_key, update_key, snapshot)
+
+
+def _endpoint_args(
+    caller_id: str, topic: Any, caller_api: Any, topic_type: Any = ANY_TYPE
+) -> tuple[str, str, str]:
+    """A topic registration's arguments, checked in rosmaster's order: (topic, type, caller_api); an
+    unregistration gives no type."""
+    topic = names.topic_arg(topic, caller_id, "topic")
+    topic_type = names.type_arg(topic_type)
+    return topic, topic_type, names.api_arg(caller_api, "caller_api")
+
+
+def _param_subscription_args(caller_id: str, caller_api: Any, key: Any) -> tuple[str, str, str]:
+    """(caller_api, key, the key subscribers are registered under: a namespace ends in /)."""
+    caller_api = names.api_arg(caller_api, "caller_api")
+    key = names.resolve(names.key_arg(key), caller_id)
+    return caller_api, key, key if key == SEP else names.canonicalize(key) + SEP
 
 
 def api_methods() -> list[str]:

@@ -12,7 +12,7 @@ import contextlib
 import socket
 import struct
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -159,18 +159,10 @@ class ServiceClient:
     def call_raw(self, payload: bytes) -> bytes:
         """Send one serialized request, return the serialized response."""
         sock, stream = self._connection()
-        try:
+        with self._failing(self.close, "before answering (its server exited or crashed)"):
             sock.sendall(tcpros.frame(payload))
             ok = tcpros.read_exact(stream, 1)
             body = tcpros.read_frame(stream)
-        except TimeoutError as err:
-            self.close()
-            raise RostoolError(f"service {self.name} did not answer within {self.timeout:g} s") from err
-        except (OSError, tcpros.ConnectionClosed) as err:
-            self.close()
-            raise RostoolError(
-                f"service {self.name} closed the connection before answering (its server exited or crashed)"
-            ) from err
         if not self.persistent:
             self.close()
         if _OK.unpack(ok)[0] != 1:
@@ -186,20 +178,26 @@ class ServiceClient:
         if self.persistent:
             header["persistent"] = "1"
         stream = sock.makefile("rb", buffering=1 << 16)
-        try:
+        with self._failing(sock.close, "during the handshake"):
             sock.sendall(tcpros.encode_header(header))
             reply = tcpros.read_header(stream)
-        except TimeoutError as err:
-            sock.close()
-            raise RostoolError(f"service {self.name} did not answer within {self.timeout:g} s") from err
-        except (OSError, tcpros.ConnectionClosed) as err:
-            sock.close()
-            raise RostoolError(f"service {self.name} closed the connection during the handshake") from err
         if "error" in reply:
             sock.close()
             raise RostoolError(f"service {self.name} refused the call: {reply['error']}")
         self._sock, self._stream = sock, stream
         return sock, stream
+
+    @contextlib.contextmanager
+    def _failing(self, close: Callable[[], None], when: str) -> Iterator[None]:
+        """A timeout or a lost connection while talking to the server: `close`, then one clear error."""
+        try:
+            yield
+        except TimeoutError as err:
+            close()
+            raise RostoolError(f"service {self.name} did not answer within {self.timeout:g} s") from err
+        except (OSError, tcpros.ConnectionClosed) as err:
+            close()
+            raise RostoolError(f"service {self.name} closed the connection {when}") from err
 
     def close(self) -> None:
         if self._sock is not None:
