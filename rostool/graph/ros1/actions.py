@@ -112,7 +112,7 @@ def action_summary(graph: Ros1Core, name: str) -> ActionSummary:
 
 def goal_states(graph: Ros1Core, name: str, wait: float = 2.0) -> list[GoalState] | None:
     """The goals the server reports on NS/status (None when no status arrives within `wait`)."""
-    arrived: queue.Queue[Any] = queue.Queue()
+    arrived: queue.Queue[bytes] = queue.Queue()
     status_type = graph.types.builtin("actionlib_msgs/GoalStatusArray")
     graph.node.subscribe(f"{resolve(name)}/status", lambda payload, _link: arrived.put(payload), status_type)
     try:

@@ -6,6 +6,7 @@ import _thread
 import contextlib
 import socket
 import threading
+from collections.abc import Callable
 from typing import Any
 
 from rostool.errors import RostoolError
@@ -19,7 +20,7 @@ from rostool.interfaces.ros1 import Ros1Type
 
 UNREGISTER_BUDGET = 1.0  # seconds closing may spend unregistering from the master
 
-ServiceHandler = Any  # (socket, header) -> None; services arrive with the services work
+ServiceHandler = Callable[[socket.socket, dict[str, str]], None]  # one connection, its header
 
 
 class Node:

@@ -145,7 +145,7 @@ class ServiceClient:
         self.persistent = persistent
         self.timeout = timeout
         self._sock: socket.socket | None = None
-        self._stream: Any = None
+        self._stream: tcpros.Readable | None = None
 
     def __enter__(self) -> ServiceClient:
         return self
@@ -169,8 +169,8 @@ class ServiceClient:
             raise ServiceError(f"service {self.name} failed: {body.decode('utf-8', errors='replace')}")
         return body
 
-    def _connection(self) -> tuple[socket.socket, Any]:
-        if self._sock is not None:
+    def _connection(self) -> tuple[socket.socket, tcpros.Readable]:
+        if self._sock is not None and self._stream is not None:
             return self._sock, self._stream
         sock = _open(self.name, self.uri, self.timeout)
         header = {"callerid": self.caller_id, "service": self.name, "md5sum": self.srv.md5sum,
