@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import functools
 import sys
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Literal
@@ -74,6 +74,22 @@ def live_graph(ctx: click.Context, interface_paths: Sequence[str] = ()) -> Itera
         yield graph
     finally:
         graph.close()
+
+
+def echo_names(names: Sequence[str], count: bool) -> None:
+    """A find verb's answer: the names one a line (nothing at all for none), or with -c their number."""
+    click.echo(str(len(names)) if count else "\n".join(names), nl=count or bool(names))
+
+
+def echo_announced_types(kind: str, name: str, announced: Iterable[tuple[str, str | None]]) -> None:
+    """ros2 service/action type: the type(s) announced for the resolved NAME, else nothing on stdout and an
+    error (exit 1)."""
+    from rostool.errors import RostoolError
+
+    types = sorted({type_name for found, type_name in announced if found == name and type_name})
+    if not types:
+        raise RostoolError(f"unknown {kind} {name}: no server announces it (`rostool {kind} list`)")
+    click.echo("\n".join(types))
 
 
 def print_json(value: Any) -> None:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from rostool.commands._common import ignored_ros2_options, live_graph
+from rostool.commands._common import echo_names, ignored_ros2_options, live_graph
 from rostool.commands.action._options import count_option
 
 
@@ -26,4 +26,4 @@ def find(ctx: click.Context, type_name: str, count: bool) -> None:
     with live_graph(ctx) as graph:
         wanted = {type_name, to_store_name(type_name, "action")}
         names = sorted(a.name for a in graph.actions() if a.type in wanted)
-    click.echo(str(len(names)) if count else "\n".join(names), nl=count or bool(names))
+    echo_names(names, count)

@@ -29,15 +29,9 @@ _TYPE_NAME = re.compile(r"[A-Za-z][\w]*/(action/)?[A-Za-z]\w*\Z")
 @ignored_ros2_options("no_daemon", "spin_time", "use_sim_time")
 @click.pass_context
 def send_goal(
-    ctx: click.Context,
-    name: str,
-    values: tuple[str, ...],
-    show_feedback: bool,
-    from_stdin: bool,
-    timeout: float | None,
-    interface_paths: tuple[str, ...],
-    as_json: bool,
-) -> None:
+    ctx: click.Context, name: str, values: tuple[str, ...], show_feedback: bool, from_stdin: bool,
+    timeout: float | None, interface_paths: tuple[str, ...], as_json: bool,
+) -> None:  # fmt: skip
     """Send a goal and wait for its result; Ctrl+C (or --timeout) cancels the goal first.
 
     GOAL is one YAML mapping, or the goal's field values in order. TYPE (pkg/Type) may be left out when

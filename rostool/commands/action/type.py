@@ -4,8 +4,7 @@ from __future__ import annotations
 
 import click
 
-from rostool.commands._common import ignored_ros2_options, live_graph
-from rostool.errors import RostoolError
+from rostool.commands._common import echo_announced_types, ignored_ros2_options, live_graph
 
 
 @click.command("type")
@@ -22,7 +21,5 @@ def type_(ctx: click.Context, name: str) -> None:
     """
     with live_graph(ctx) as graph:
         resolved = graph.resolve(name)
-        types = sorted({a.type for a in graph.actions() if a.name == resolved and a.type})
-    if not types:  # as ros2 action type: nothing on stdout, exit 1
-        raise RostoolError(f"unknown action {resolved}: no server announces it (`rostool action list`)")
-    click.echo("\n".join(types))
+        announced = [(a.name, a.type) for a in graph.actions()]
+    echo_announced_types("action", resolved, announced)

@@ -15,13 +15,8 @@ from rostool.graph.base import Graph, Parameters
 
 @click.command("list")
 @click.argument("namespace", required=False, metavar="[NAMESPACE|NODE]")
-@click.option(
-    "--param-prefixes",
-    "prefixes",
-    multiple=True,
-    metavar="PREFIX",
-    help="ROS 2: only parameters named PREFIX or PREFIX.* (repeatable).",
-)
+@click.option("--param-prefixes", "prefixes", multiple=True, metavar="PREFIX",
+              help="ROS 2: only parameters named PREFIX or PREFIX.* (repeatable).")  # fmt: skip
 @click.option("-t", "--param-type", "with_types", is_flag=True, help="ROS 2: each name with its type.")
 @click.option("--filter", "pattern", metavar="REGEX", help="ROS 2: only names matching REGEX.")
 @click.option("--service-timeout", type=click.FloatRange(min=0), hidden=True)

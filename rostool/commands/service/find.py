@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from rostool.commands._common import ignored_ros2_options, live_graph
+from rostool.commands._common import echo_names, ignored_ros2_options, live_graph
 from rostool.commands.service._options import count_option, hidden_services_option
 from rostool.errors import RostoolError
 
@@ -35,4 +35,4 @@ def find(ctx: click.Context, type_name: str, hidden: bool, count: bool) -> None:
             )
         else:
             names = graph.find_services(type_name)
-    click.echo(str(len(names)) if count else "\n".join(names), nl=count or bool(names))
+    echo_names(names, count)

@@ -5,8 +5,7 @@ from __future__ import annotations
 
 import click
 
-from rostool.commands._common import ignored_ros2_options, live_graph
-from rostool.errors import RostoolError
+from rostool.commands._common import echo_announced_types, ignored_ros2_options, live_graph
 
 
 @click.command("type")
@@ -23,12 +22,7 @@ def type_(ctx: click.Context, name: str) -> None:
     """
     with live_graph(ctx) as graph:
         if graph.style == "ros2":  # as ros2 service type: the announced type(s), or nothing and exit 1
-            resolved = graph.resolve(name)
-            types = sorted({t for n, t, _ in graph.services() if n == resolved and t})
-            if not types:
-                raise RostoolError(
-                    f"unknown service {resolved}: no server announces it (`rostool service list`)"
-                )
-            click.echo("\n".join(types))
+            announced = [(n, t) for n, t, _ in graph.services()]
+            echo_announced_types("service", graph.resolve(name), announced)
             return
         click.echo(graph.service_type(name))

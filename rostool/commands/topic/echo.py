@@ -19,11 +19,8 @@ from rostool.graph.qos import QosRequest
 @click.argument("message_type", required=False, metavar="[TYPE]")
 @click.option("-n", "count", type=click.IntRange(min=1), help="Stop after N messages.")
 @click.option("--once", is_flag=True, help="Stop after one message (same as -n 1).")
-@click.option(
-    "--timeout",
-    type=click.FloatRange(min=0, min_open=True),
-    help="Give up after S seconds with no message (exit 1).",
-)
+@click.option("--timeout", type=click.FloatRange(min=0, min_open=True),
+              help="Give up after S seconds with no message (exit 1).")  # fmt: skip
 @click.option(
     "--field", "fields", multiple=True, help="Print only this field path (e.g. pose.position.x); repeatable."
 )
@@ -34,54 +31,25 @@ from rostool.graph.qos import QosRequest
 @click.option("--noarr", "--no-arr", "noarr", is_flag=True, help="Show arrays as their type and length.")
 @click.option("--nostr", "--no-str", "nostr", is_flag=True, help="Show strings as their length.")
 @click.option("--filter", "filter_text", help="Only messages where EXPR holds, e.g. \"m.data == 'go'\".")
-@click.option(
-    "-l",
-    "--truncate-length",
-    type=click.IntRange(min=0),
-    help="ROS 2: cut strings and arrays after N elements with '...' (default 128).",
-)
+@click.option("-l", "--truncate-length", type=click.IntRange(min=0),
+              help="ROS 2: cut strings and arrays after N elements with '...' (default 128).")  # fmt: skip
 @click.option("-f", "--full-length", is_flag=True, help="ROS 2: never truncate.")
 @click.option("--flow-style", is_flag=True, help="ROS 2: YAML in flow style.")
 @click.option("--raw", is_flag=True, help="ROS 2: the serialized bytes (CDR) of each message.")
-@click.option(
-    "-i",
-    "--include-message-info",
-    is_flag=True,
-    help="ROS 2: before each message, what rostool knows of its arrival (received_timestamp).",
-)
-@click.option(
-    "--no-lost-messages",
-    "--lost-messages",
-    "lost_messages",
-    is_flag=True,
-    help="Accepted and ignored (rostool does not report lost messages).",
-)
+@click.option("-i", "--include-message-info", is_flag=True, help="ROS 2: before each message, what rostool "
+              "knows of its arrival (received_timestamp).")  # fmt: skip
+@click.option("--no-lost-messages", "--lost-messages", "lost_messages", is_flag=True,
+              help="Accepted and ignored (rostool does not report lost messages).")  # fmt: skip
 @interfaces_option
 @ignored_ros2_options("no_daemon", "spin_time", "use_sim_time")
 @click.pass_context
 @qos_options
 def echo(
-    ctx: click.Context,
-    name: str,
-    message_type: str | None,
-    count: int | None,
-    once: bool,
-    timeout: float | None,
-    fields: tuple[str, ...],
-    as_json: bool,
-    as_csv: bool,
-    noarr: bool,
-    nostr: bool,
-    filter_text: str | None,
-    truncate_length: int | None,
-    full_length: bool,
-    flow_style: bool,
-    raw: bool,
-    include_message_info: bool,
-    lost_messages: bool,
-    interface_paths: tuple[str, ...],
-    qos: QosRequest,
-) -> None:
+    ctx: click.Context, name: str, message_type: str | None, count: int | None, once: bool,
+    timeout: float | None, fields: tuple[str, ...], as_json: bool, as_csv: bool, noarr: bool, nostr: bool,
+    filter_text: str | None, truncate_length: int | None, full_length: bool, flow_style: bool, raw: bool,
+    include_message_info: bool, lost_messages: bool, interface_paths: tuple[str, ...], qos: QosRequest,
+) -> None:  # fmt: skip
     """Print the messages of a topic (YAML like rostopic echo or ros2 topic echo, or --json/--csv).
 
     TYPE (ROS 2 form, optional) names the message type; without it the publishers' type is used.

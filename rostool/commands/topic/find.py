@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from rostool.commands._common import ignored_ros2_options, live_graph
+from rostool.commands._common import echo_names, ignored_ros2_options, live_graph
 from rostool.commands.topic._options import include_hidden_option
 
 
@@ -30,4 +30,4 @@ def find(ctx: click.Context, type_name: str, count_topics: bool, include_hidden:
             if (t.type == type_name or (ros2 and t.type == to_store_name(type_name)))
             and (include_hidden or not ros2 or not hidden_name(t.name))
         ]  # fmt: skip
-    click.echo(str(len(found)) if count_topics else "\n".join(found), nl=count_topics or bool(found))
+    echo_names(found, count_topics)

@@ -24,38 +24,17 @@ HOME_AND_CLEAR = "\x1b[H\x1b[J"
 
 @click.command(context_settings=CONTEXT)
 @click.argument("paths", nargs=-1, required=True, metavar="FIELD...")
-@click.option(
-    "-o",
-    "--output",
-    type=click.Path(dir_okay=False, path_type=Path),
-    metavar="FILE",
-    help="At the end (--duration or Ctrl+C), draw the last window to FILE (.png, .svg, .pdf).",
-)
-@click.option(
-    "--duration",
-    type=click.FloatRange(min=0, min_open=True),
-    metavar="S",
-    help="Stop after S seconds (default: at Ctrl+C).",
-)
-@click.option(
-    "--window",
-    type=click.FloatRange(min=0, min_open=True),
-    default=30.0,
-    show_default=True,
-    metavar="S",
-    help="Seconds of data shown (and saved with -o).",
-)
-@click.option(
-    "--rate",
-    type=click.FloatRange(min=0.5, max=30),
-    default=4.0,
-    show_default=True,
-    metavar="HZ",
-    help="Terminal redraws per second.",
-)
-@click.option(
-    "--csv", "as_csv", is_flag=True, help="Print CSV rows as messages come (the default in a pipe)."
-)
+@click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path), metavar="FILE",
+              help="At the end (--duration or Ctrl+C), draw the last window to FILE "
+              "(.png, .svg, .pdf).")  # fmt: skip
+@click.option("--duration", type=click.FloatRange(min=0, min_open=True), metavar="S",
+              help="Stop after S seconds (default: at Ctrl+C).")  # fmt: skip
+@click.option("--window", type=click.FloatRange(min=0, min_open=True), default=30.0, show_default=True,
+              metavar="S", help="Seconds of data shown (and saved with -o).")  # fmt: skip
+@click.option("--rate", type=click.FloatRange(min=0.5, max=30), default=4.0, show_default=True, metavar="HZ",
+              help="Terminal redraws per second.")  # fmt: skip
+@click.option("--csv", "as_csv", is_flag=True,
+              help="Print CSV rows as messages come (the default in a pipe).")  # fmt: skip
 @click.option("--header-stamp", is_flag=True, help="x = each message's header.stamp instead of receive time.")
 @interfaces_option
 @click.pass_context

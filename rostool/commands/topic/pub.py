@@ -19,96 +19,40 @@ from rostool.graph.qos import QosRequest
 @click.argument("name")
 @click.argument("type_name", metavar="TYPE")
 @click.argument("values", nargs=-1)
-@click.option(
-    "-r",
-    "--rate",
-    type=click.FloatRange(min=0, min_open=True),
-    help="Publish repeatedly at HZ (ROS 2: 1 Hz when not given).",
-)
-@click.option(
-    "-1",
-    "--once",
-    is_flag=True,
-    help="Publish once, then exit (ROS 1: stay latched 3 s first; ROS 2: after --keep-alive).",
-)
+@click.option("-r", "--rate", type=click.FloatRange(min=0, min_open=True),
+              help="Publish repeatedly at HZ (ROS 2: 1 Hz when not given).")  # fmt: skip
+@click.option("-1", "--once", is_flag=True, help="Publish once, then exit (ROS 1: stay latched 3 s first; "
+              "ROS 2: after --keep-alive).")  # fmt: skip
 @click.option("-l", "--latch", is_flag=True, help="Latch the last message for late subscribers.")
-@click.option(
-    "-n",
-    "n_value",
-    metavar="N|NAME",
-    help="ROS 1: with -r, stop after N messages. ROS 2: --node-name (a number still means N messages).",
-)
+@click.option("-n", "n_value", metavar="N|NAME", help="ROS 1: with -r, stop after N messages. ROS 2: "
+              "--node-name (a number still means N messages).")  # fmt: skip
 @click.option("--count", type=click.IntRange(min=1), help="With -r: stop after N messages.")
 @click.option("--node-name", help="ROS 2: the name of the publishing node (default: rostool).")
-@click.option(
-    "-t", "--times", type=click.IntRange(min=1), help="ROS 2: publish N times at --rate, then exit."
-)
-@click.option(
-    "-w",
-    "--wait-matching-subscriptions",
-    "wait_matching",
-    type=click.IntRange(min=0),
-    help="ROS 2: first wait for N matching subscriptions (default: the subscribers discovery shows, "
-    "at most 3 s, with -1/-t).",
-)
-@click.option(
-    "-m",
-    "--max-wait-time-secs",
-    "max_wait",
-    type=click.FloatRange(min=0),
-    help="ROS 2: wait at most S seconds for -w's subscriptions.",
-)
-@click.option(
-    "--keep-alive",
-    type=click.FloatRange(min=0),
-    default=0.1,
-    show_default=True,
-    help="ROS 2: stay up S seconds after the last message.",
-)
-@click.option(
-    "-p",
-    "--print",
-    "print_nth",
-    type=click.IntRange(min=0),
-    default=1,
-    show_default=True,
-    help="ROS 2: print every N-th message published (0: none).",
-)
+@click.option("-t", "--times", type=click.IntRange(min=1),
+              help="ROS 2: publish N times at --rate, then exit.")  # fmt: skip
+@click.option("-w", "--wait-matching-subscriptions", "wait_matching", type=click.IntRange(min=0),
+              help="ROS 2: first wait for N matching subscriptions (default: the subscribers discovery "
+              "shows, at most 3 s, with -1/-t).")  # fmt: skip
+@click.option("-m", "--max-wait-time-secs", "max_wait", type=click.FloatRange(min=0),
+              help="ROS 2: wait at most S seconds for -w's subscriptions.")  # fmt: skip
+@click.option("--keep-alive", type=click.FloatRange(min=0), default=0.1, show_default=True,
+              help="ROS 2: stay up S seconds after the last message.")  # fmt: skip
+@click.option("-p", "--print", "print_nth", type=click.IntRange(min=0), default=1, show_default=True,
+              help="ROS 2: print every N-th message published (0: none).")  # fmt: skip
 @click.option("--stdin", "from_stdin", is_flag=True, help="Read the message (YAML) from standard input.")
-@click.option(
-    "-f",
-    "--file",
-    "file",
-    type=click.Path(exists=True, dir_okay=False),
-    help="YAML messages separated by ---.",
-)
+@click.option("-f", "--file", "file", type=click.Path(exists=True, dir_okay=False),
+              help="YAML messages separated by ---.")  # fmt: skip
 @click.option("-q", "--quiet", is_flag=True, help="Print nothing.")
 @interfaces_option
 @ignored_ros2_options("spin_time", "use_sim_time")
 @click.pass_context
 @qos_options
 def pub(
-    ctx: click.Context,
-    name: str,
-    type_name: str,
-    values: tuple[str, ...],
-    rate: float | None,
-    once: bool,
-    latch: bool,
-    n_value: str | None,
-    count: int | None,
-    node_name: str | None,
-    times: int | None,
-    wait_matching: int | None,
-    max_wait: float | None,
-    keep_alive: float,
-    print_nth: int,
-    from_stdin: bool,
-    file: str | None,
-    quiet: bool,
-    interface_paths: tuple[str, ...],
-    qos: QosRequest,
-) -> None:
+    ctx: click.Context, name: str, type_name: str, values: tuple[str, ...], rate: float | None, once: bool,
+    latch: bool, n_value: str | None, count: int | None, node_name: str | None, times: int | None,
+    wait_matching: int | None, max_wait: float | None, keep_alive: float, print_nth: int, from_stdin: bool,
+    file: str | None, quiet: bool, interface_paths: tuple[str, ...], qos: QosRequest,
+) -> None:  # fmt: skip
     """Publish a message given as YAML (missing fields get defaults).
 
     VALUES is one YAML mapping or the field values in order, as rostopic pub takes them. TYPE may be
