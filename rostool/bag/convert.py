@@ -26,7 +26,10 @@ from rosbags.interfaces import Connection, ConnectionExtRosbag1, ConnectionExtRo
 from rosbags.typesys.store import Typestore
 
 from rostool.bag.crossver import CrossVersionStores
-from rostool.bag.open import BagInput, describe, detect
+from rostool.bag.failures import describe
+from rostool.bag.formats import FORMATS, by_storage, by_suffix
+from rostool.bag.model import BagFormat, BagInput
+from rostool.bag.open import detect
 from rostool.bag.reader import BagReader
 from rostool.bag.replace import check_replaceable, swap_into_place
 from rostool.errors import RostoolError
@@ -41,11 +44,11 @@ ROSBAG2_VERSION: Literal[8] = 8  # readable by jazzy and newer (kilted writes 9)
 class Output:
     path: Path
     layout: Literal["bag", "file", "dir"]
-    storage: Literal["bag", "mcap", "sqlite3"]
+    fmt: BagFormat  # a ROS 1 bag, or the storage of the ROS 2 file or directory
 
     @property
     def ros_version(self) -> int:
-        return 1 if self.storage == "bag" else 2
+        return self.fmt.ros_version
 
 
 @dataclass
@@ -68,24 +71,24 @@ class Result:
 def plan_output(dst: str | Path, fmt: OutputFormat | None, like: BagInput | None = None) -> Output:
     """Where and how to write: from DST's suffix, `--format`, else like the input (filter) or mcap dir."""
     path = Path(dst)
-    suffix = path.suffix.lower()
-    by_suffix: dict[str, OutputFormat] = {".bag": "bag", ".mcap": "mcap", ".db3": "db3"}
-    if fmt is not None and suffix in by_suffix and by_suffix[suffix] != fmt:
-        raise RostoolError(f"{path}: the name says {by_suffix[suffix]} but --format says {fmt}")
-    chosen = fmt or by_suffix.get(suffix)
-    if chosen == "bag":
-        return Output(path, "bag", "bag")
-    if chosen is not None and suffix in by_suffix:
-        return Output(path, "file", "mcap" if chosen == "mcap" else "sqlite3")
+    named = by_suffix(path.suffix.lower())
+    if fmt is not None and named is not None and named.kind != fmt:
+        raise RostoolError(f"{path}: the name says {named.kind} but --format says {fmt}")
+    chosen = FORMATS[fmt] if fmt is not None else named
     if chosen is not None:
-        return Output(path, "dir", "mcap" if chosen == "mcap" else "sqlite3")
-    if like is not None and like.kind == "bag":
-        return Output(path, "bag", "bag")
-    if like is not None and like.kind in ("mcap", "db3") and len(like.files) == 1:
-        return Output(path, "file", "mcap" if like.kind == "mcap" else "sqlite3")
+        return _output(path, chosen, single_file=named is not None)
+    if like is not None and like.kind == "rosbag2":
+        return _output(path, by_storage(like.storage), single_file=False)
     if like is not None:
-        return Output(path, "dir", "mcap" if like.storage == "mcap" else "sqlite3")
-    return Output(path, "dir", "mcap")
+        return _output(path, FORMATS[like.kind], single_file=len(like.files) == 1)
+    return _output(path, FORMATS["mcap"], single_file=False)
+
+
+def _output(path: Path, fmt: BagFormat, single_file: bool) -> Output:
+    """A ROS 1 bag is a file; ROS 2 storage is one file where asked, else a rosbag2 directory of it."""
+    if fmt.ros_version == 1:
+        return Output(path, "bag", fmt)
+    return Output(path, "file" if single_file else "dir", fmt)
 
 
 def parse_time(text: str | None, bag_start_ns: int, name: str) -> int | None:
@@ -170,8 +173,7 @@ def _atomic(output: Output, force: bool) -> Iterator[Path]:
         yield inner
         produced = inner
         if output.layout == "file":
-            suffix = ".mcap" if output.storage == "mcap" else ".db3"
-            produced = inner / f"{inner.name}{suffix}"
+            produced = inner / f"{inner.name}{output.fmt.suffix}"
         if output.path.exists() or output.path.is_symlink():
             if not force:
                 raise RostoolError(f"{output.path} appeared while converting; pass --force to overwrite it")
@@ -219,7 +221,7 @@ class _Sink:
         self._dst_stores = CrossVersionStores(self.dst_version)
         self.writer: Any
         with _writing(path):
-            if output.storage == "bag":
+            if output.ros_version == 1:
                 from rosbags.rosbag1 import Writer as Writer1
 
                 self.writer = Writer1(path)
@@ -227,7 +229,7 @@ class _Sink:
                 from rosbags.rosbag2 import StoragePlugin
                 from rosbags.rosbag2 import Writer as Writer2
 
-                plugin = StoragePlugin.MCAP if output.storage == "mcap" else StoragePlugin.SQLITE3
+                plugin = StoragePlugin[output.fmt.storage.upper()]
                 self.writer = Writer2(path, version=ROSBAG2_VERSION, storage_plugin=plugin)
             self.writer.open()
 

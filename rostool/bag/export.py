@@ -18,7 +18,7 @@ from typing import Any, Literal
 
 from rostool.bag.columnar import columns_from_messages
 from rostool.bag.export_columns import Column, TypePlan, arrow_type, is_scalar
-from rostool.bag.open import warn
+from rostool.bag.failures import warn
 from rostool.errors import RostoolError
 from rostool.interfaces.typestores import DEFAULT_DISTRO
 

@@ -11,7 +11,7 @@ from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
-from rostool.bag.open import warn
+from rostool.bag.failures import warn
 
 # encoding -> (channels, numpy dtype, Pillow mode after conversion, reorder to RGB(A))
 _ENCODINGS: dict[str, tuple[int, str, str, bool]] = {

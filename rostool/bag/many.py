@@ -18,9 +18,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, TypeVar
 
+from rostool.bag.formats import FILE_SUFFIXES, storage_kind
 from rostool.errors import RostoolError
 
-BAG_SUFFIXES = (".bag", ".mcap", ".db3")
 _SPLIT = re.compile(r"^(.*)_\d+$")
 T = TypeVar("T")
 
@@ -38,7 +38,7 @@ def is_one_bag(path: Path) -> bool:
     entries = list(path.iterdir())
     if any(entry.is_dir() or entry.suffix == ".bag" for entry in entries):
         return False
-    storage = [entry for entry in entries if entry.suffix in (".mcap", ".db3")]
+    storage = [entry for entry in entries if storage_kind(entry)]
     if not storage:
         return True  # not a bag either: the reader says so in one line
     if len(storage) == 1:
@@ -89,17 +89,17 @@ def _expand(paths: Sequence[str | Path]) -> list[BagItem]:
 def _walk(directory: Path) -> Iterator[Path]:
     for entry in directory.iterdir():
         if entry.is_dir():
-            storage = any(p.suffix in (".mcap", ".db3") for p in entry.iterdir())
+            storage = any(storage_kind(p) for p in entry.iterdir())
             if (entry / "metadata.yaml").exists() or (storage and is_one_bag(entry)):
                 yield entry
             else:
                 yield from _walk(entry)
-        elif entry.suffix in BAG_SUFFIXES:
+        elif entry.suffix in FILE_SUFFIXES:
             yield entry
 
 
 def _name(relative: Path) -> str:
-    stem = relative.with_suffix("") if relative.suffix in BAG_SUFFIXES else relative
+    stem = relative.with_suffix("") if relative.suffix in FILE_SUFFIXES else relative
     return re.sub(r"[^A-Za-z0-9_.-]", "_", str(stem).replace("/", "__")) or "bag"
 
 

@@ -22,19 +22,16 @@ Timing: see `schedule.py` (absolute due times, no drift). The playback origin is
 
 from __future__ import annotations
 
-import contextlib
-import os
 import re
-import select
 import struct
-import sys
 import time
 from collections.abc import Callable, Collection, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Protocol, TextIO
+from typing import Any, Protocol
 
 from rosbags.interfaces import Connection, ConnectionExtRosbag1, ConnectionExtRosbag2
 
+from rostool.bag.play_console import Console
 from rostool.bag.reader import BagReader
 from rostool.bag.schedule import PlayClock, sleep_until
 from rostool.errors import RostoolError
@@ -118,80 +115,6 @@ def parse_remaps(values: Collection[str]) -> dict[str, str]:
             raise RostoolError(f"bad remapping {value!r}: expected FROM:=TO, e.g. /chatter:=/talk")
         remaps[source] = target
     return remaps
-
-
-class Console:
-    """The terminal side of playback: rosbag's status line on stderr and space/s keys on stdin.
-
-    The status line needs stderr to be a terminal; the keys need stdin to be the controlling terminal of a
-    foreground process (else changing its mode would stop us with SIGTTOU). Terminal settings are always
-    restored, Ctrl+C included."""
-
-    def __init__(self, status: bool, keyboard: bool, err: TextIO | None = None) -> None:
-        self.err = err or sys.stderr
-        self.show_status = status
-        self.keyboard = keyboard
-        self._saved: Any = None
-        self._fd = -1
-        self._shown = False
-
-    @classmethod
-    def detect(cls, quiet: bool) -> Console:
-        status = not quiet and sys.stderr.isatty()
-        keyboard = False
-        with contextlib.suppress(OSError, ValueError, AttributeError):
-            fd = sys.stdin.fileno()
-            keyboard = os.isatty(fd) and os.tcgetpgrp(fd) == os.getpgrp()
-        return cls(status, keyboard)
-
-    def __enter__(self) -> Console:
-        if self.keyboard:
-            import termios
-            import tty
-
-            try:
-                self._fd = sys.stdin.fileno()
-                self._saved = termios.tcgetattr(self._fd)
-                tty.setcbreak(self._fd)
-            except (OSError, termios.error):
-                self.keyboard = False
-        return self
-
-    def __exit__(self, *_exc: object) -> None:
-        if self._saved is not None:
-            import termios
-
-            with contextlib.suppress(OSError, termios.error):
-                termios.tcsetattr(self._fd, termios.TCSADRAIN, self._saved)
-            self._saved = None
-        if self._shown:
-            self.err.write("\n")
-            self.err.flush()
-            self._shown = False
-
-    def read_keys(self) -> str:
-        if not self.keyboard:
-            return ""
-        ready, _w, _x = select.select([self._fd], [], [], 0)
-        if not ready:
-            return ""
-        return os.read(self._fd, 64).decode(errors="replace")
-
-    def status(self, state: str, bag_time: float, elapsed: float, total: float) -> None:
-        if not self.show_status:
-            return
-        line = f" [{state}]  Bag Time: {bag_time:13.6f}   Duration: {elapsed:.6f} / {total:.6f}"
-        self.err.write(f"\r{line}               \r")
-        self.err.flush()
-        self._shown = True
-
-    def say(self, text: str) -> None:
-        if self.show_status:
-            if self._shown:
-                self.err.write("\n")
-                self._shown = False
-            self.err.write(text + "\n")
-            self.err.flush()
 
 
 class Player:

@@ -17,14 +17,14 @@ gets a DDS writer, transient_local where the recording publisher latched (ROS 1)
 from __future__ import annotations
 
 import struct
-from functools import partial
+from functools import cached_property, partial
 from typing import TYPE_CHECKING, Any, cast
 
 from rosbags.interfaces import Connection, ConnectionExtRosbag1, ConnectionExtRosbag2
 
 from rostool.bag.crossver import CrossVersionStores
-from rostool.bag.open import describe
-from rostool.bag.play import Console, Player, PlayOptions, RawPublisher, _Kind
+from rostool.bag.failures import describe
+from rostool.bag.play import Player, RawPublisher, _Kind
 from rostool.errors import RostoolError
 
 if TYPE_CHECKING:
@@ -32,8 +32,6 @@ if TYPE_CHECKING:
 
     from rosbags.typesys.store import Typestore
 
-    from rostool.bag.reader import BagReader
-    from rostool.graph.base import Graph
 
 # Little-endian CDR encapsulation, then builtin_interfaces/Time (int32 sec, uint32 nanosec).
 _CDR_CLOCK = struct.Struct("<4siI")
@@ -44,16 +42,10 @@ class Ros2Player(Player):
     graph_name = "ROS 2"
     clock_per_message = False  # rosbag2 publishes /clock at its frequency only
 
-    def __init__(
-        self,
-        reader: BagReader,
-        graph: Graph,
-        options: PlayOptions,
-        console: Console | None = None,
-        warn: Callable[[str], None] | None = None,
-    ) -> None:
-        super().__init__(reader, graph, options, console, warn)
-        self._cdr_stores = CrossVersionStores(dst_version=2)
+    @cached_property
+    def _cdr_stores(self) -> CrossVersionStores:
+        """The bag's ROS 1 types as ROS 2 types, made as they are first played."""
+        return CrossVersionStores(dst_version=2)
 
     def advertise(self) -> None:
         if self.reader.ros_version == 2:

@@ -21,7 +21,10 @@ from typing import Any
 
 from rosbags.interfaces import Connection, ConnectionExtRosbag1, MessageDefinitionFormat
 
-from rostool.bag.open import BagInput, detect, fallback_warning, guard, sniff, warn
+from rostool.bag.failures import guard, warn
+from rostool.bag.formats import FORMATS, by_storage, sniff
+from rostool.bag.model import BagFormat, BagInput
+from rostool.bag.open import detect, fallback_warning
 from rostool.errors import RostoolError
 from rostool.interfaces.typestores import DEFAULT_DISTRO, StoredDefinition, TypeResolver
 
@@ -100,44 +103,40 @@ class BagReader(AbstractContextManager["BagReader"]):
         return self._stack.enter_context(remote.local_copy(remote.resolve(given)))
 
     def _open(self, bag: BagInput) -> None:
-        if bag.kind == "bag":
-            from rosbags.rosbag1 import Reader as Reader1
-
-            self._add_part(bag.path, Reader1(bag.path), bag)
-        elif bag.kind == "rosbag2":
-            from rosbags.rosbag2.reader import DirectoryReader
-
-            directory = DirectoryReader(bag.path)
-            try:
-                self._enter(bag.path, directory)
-            except RostoolError as err:
-                self._open_beside(bag, err)
-                return
-            compressed = directory.metadata.compression_mode == "message"
-            self.message_compressed = self.message_compressed or compressed
-            for storage, path in zip(directory.storages, bag.files, strict=False):
-                self._add_storage(path, storage, compressed, counts=False)
-            # Counts (and topics that no storage has) come from metadata.yaml.
-            self._register(bag.path, directory.connections, counts=True)
+        fmt = FORMATS[bag.kind]
+        if bag.kind == "rosbag2":
+            self._open_directory(bag, fmt.reader(bag.path))
+        elif fmt.ros_version == 1:
+            self._add_part(bag.path, fmt.reader(bag.path), bag)
         else:
-            self._open_storages(bag.kind, bag.files)
+            self._open_storages(fmt, bag.files)
 
-    def _open_storages(self, kind: str, files: Sequence[Path]) -> None:
-        from rosbags.rosbag2.storage_mcap import McapReader
-        from rosbags.rosbag2.storage_sqlite3 import Sqlite3Reader
+    def _open_directory(self, bag: BagInput, directory: Any) -> None:
+        try:
+            self._enter(bag.path, directory)
+        except RostoolError as err:
+            self._open_beside(bag, err)
+            return
+        compressed = directory.metadata.compression_mode == "message"
+        self.message_compressed = self.message_compressed or compressed
+        for storage, path in zip(directory.storages, bag.files, strict=False):
+            self._add_storage(path, storage, compressed, counts=False)
+        # Counts (and topics that no storage has) come from metadata.yaml.
+        self._register(bag.path, directory.connections, counts=True)
 
+    def _open_storages(self, fmt: BagFormat, files: Sequence[Path]) -> None:
         for path in files:
-            storage = McapReader(path) if kind == "mcap" else Sqlite3Reader(path)
+            storage = fmt.reader(path)
             self._enter(path, storage)
             self._add_storage(path, storage, False, counts=True)
 
     def _open_beside(self, bag: BagInput, failure: RostoolError) -> None:
         """rosbags refused the directory although metadata.yaml passed our checks: when its storage files
         open on their own, metadata.yaml was the problem; read them without it (one warning line)."""
-        kind = "mcap" if bag.storage == "mcap" else "db3"
-        if bag.metadata is None or any(sniff(path) != kind for path in bag.files):
+        fmt = by_storage(bag.storage)
+        if bag.metadata is None or any(sniff(path) != fmt.kind for path in bag.files):
             raise failure
-        self._open_storages(kind, bag.files)  # when they fail too, their own error names the file
+        self._open_storages(fmt, bag.files)  # when they fail too, their own error names the file
         problem = str(failure).removeprefix(f"{bag.path}: ").removeprefix("cannot read bag: ")
         warn(fallback_warning(bag.metadata, f"rejected by the rosbag2 reader: {problem}", bag.files))
 

@@ -19,10 +19,10 @@ from dataclasses import dataclass
 from pathlib import Path, PurePosixPath
 from typing import Any
 
+from rostool.bag.formats import FILE_SUFFIXES
 from rostool.errors import RostoolError
 
 _URI = re.compile(r"^[A-Za-z][A-Za-z0-9+.-]*://")
-BAG_SUFFIXES = (".bag", ".mcap", ".db3")
 
 
 def is_remote(text: object) -> bool:
@@ -124,7 +124,7 @@ def list_bags(remote: RemotePath) -> list[RemotePath]:
     bags = [remote.child(d) for d in rosbag2]
     for relative in files:
         inside = any(relative.startswith(d + "/") for d in rosbag2)
-        if not inside and PurePosixPath(relative).suffix in BAG_SUFFIXES:
+        if not inside and PurePosixPath(relative).suffix in FILE_SUFFIXES:
             bags.append(remote.child(relative))
     if not bags:
         raise RostoolError(f"{remote}: no bags under this prefix (.bag, .mcap, .db3 or rosbag2 prefixes)")

@@ -18,15 +18,16 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal
 
+from rostool.bag.formats import by_storage
+from rostool.bag.record_sinks import Ros2Sink
 from rostool.bag.replace import check_replaceable, remove_bag
+from rostool.bag.rosbag2_metadata import write_metadata
 from rostool.errors import RostoolError
 
 if TYPE_CHECKING:
-    from rostool.bag.record import Ros2Sink
     from rostool.graph.recording import RecordSource
 
 Storage = Literal["mcap", "sqlite3"]
-SUFFIX = {"mcap": "mcap", "sqlite3": "db3"}
 
 
 @dataclass
@@ -77,20 +78,18 @@ class Rosbag2DirSink:
 
     # -- files -----------------------------------------------------------------------------------
     def _open_part(self) -> Ros2Sink:
-        from rostool.bag.record import Ros2Sink
-
         layout = self.layout
-        name = f"{layout.path.name}_{self._index}.{SUFFIX[layout.storage]}"
+        fmt = by_storage(layout.storage)
+        name = f"{layout.path.name}_{self._index}{fmt.suffix}"
         compression = None
         if layout.compression_mode != "none":
             compression = (layout.compression_mode, layout.compression_format or "zstd")
-        fmt = "mcap" if layout.storage == "mcap" else "db3"
         self._file_start = None
         sink = Ros2Sink(layout.path / name, fmt, self.source, False, compression)
-        if fmt == "mcap" and compression is None:
+        if fmt.kind == "mcap" and compression is None:
             # The file being written also appears as DIR/NAME_N.mcap (a second link to it): after a crash
             # it is where ros2 bag and `rostool bag reindex DIR` look for it.
-            produced = sink.active / f"{sink.active.name}.mcap"
+            produced = sink.active / f"{sink.active.name}{fmt.suffix}"
             with contextlib.suppress(OSError):
                 os.link(produced, sink.final)
         return sink
@@ -138,8 +137,6 @@ class Rosbag2DirSink:
 
     # -- metadata.yaml ---------------------------------------------------------------------------
     def _write_metadata(self) -> None:
-        import yaml
-
         parts = self._parts
         starts = [int(p["starting_time"]["nanoseconds_since_epoch"]) for p in parts if p.get("message_count")]
         ends = [
@@ -179,8 +176,4 @@ class Rosbag2DirSink:
             "custom_data": dict(self.layout.custom_data),
             "ros_distro": os.environ.get("ROS_DISTRO") or "rostool",
         }
-        text = yaml.safe_dump({"rosbag2_bagfile_information": info}, sort_keys=False)
-        target = self.layout.path / "metadata.yaml"
-        temporary = target.with_name("metadata.yaml.tmp")
-        temporary.write_text(text)
-        os.replace(temporary, target)
+        write_metadata(self.layout.path, info)

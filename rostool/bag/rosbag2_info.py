@@ -12,15 +12,12 @@ from __future__ import annotations
 import time
 from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
-if TYPE_CHECKING:
-    from rostool.bag.info import BagInfo, TopicInfo
+from rostool.bag.model import NS, BagInfo, TopicInfo
 
 INDENT = " " * 19
 SERVICE_INDENT = " " * len("Service information: ")
 SERVICE_EVENT_SUFFIX = "/_service_event"
-NS = 1_000_000_000
 
 
 @dataclass

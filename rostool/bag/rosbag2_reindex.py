@@ -11,31 +11,21 @@ import os
 import shutil
 import sqlite3
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
-from rostool.bag.open import STORAGE_SUFFIXES, check_metadata, guard, load_metadata, sniff
+from rostool.bag.failures import guard
+from rostool.bag.mcap_reindex import mcap_complete, rebuild_mcap
+from rostool.bag.model import BagFormat, ReindexResult
+from rostool.bag.rosbag2_metadata import check_metadata, load_metadata, write_metadata
 from rostool.errors import RostoolError
-
-if TYPE_CHECKING:
-    from rostool.bag.reindex import ReindexResult
 
 METADATA_VERSION = 8  # what `bag record` writes (rosbags' writer, version=8)
 
 
-def reindex_rosbag2(given: Path) -> ReindexResult:
-    from rostool.bag.reindex import ReindexResult
-
-    directory = given.parent if given.name == "metadata.yaml" else given
-    files = sorted(p for p in directory.iterdir() if p.suffix in STORAGE_SUFFIXES and p.is_file())
-    kinds = {sniff(p) if p.stat().st_size else None for p in files}
-    if not files:
-        raise RostoolError(f"{directory}: no .mcap or .db3 storage files to reindex")
-    if len(kinds) != 1 or kinds.pop() not in ("mcap", "db3"):
-        raise RostoolError(f"{directory}: its storage files are not all .mcap or all .db3 files")
-    kind = STORAGE_SUFFIXES[files[0].suffix]
-    if any(STORAGE_SUFFIXES[p.suffix] != kind or sniff(p) != kind for p in files):
-        raise RostoolError(f"{directory}: its storage files are not all valid {kind} files")
-    if _complete(directory, files):
+def reindex_rosbag2(directory: Path, files: list[Path], fmt: BagFormat) -> ReindexResult:
+    """Repair DIR whose storage `files` (all of format `fmt`, as `reindex` found them) lost their
+    metadata.yaml or were cut short."""
+    if _complete(directory, files, fmt):
         raise RostoolError(
             f"{directory}: reindex works on a ROS 1 .bag, an .mcap file or a rosbag2 directory cut short "
             "(no usable metadata.yaml, or storage without its summary); this one is complete"
@@ -45,15 +35,15 @@ def reindex_rosbag2(given: Path) -> ReindexResult:
         raise RostoolError(f"{backup} exists (from an earlier reindex?); move it away first")
     partial = changed = False
     try:
-        _keep_originals(directory, backup, copy_db3=kind == "db3")
+        _keep_originals(directory, backup, copied=set(files) if fmt.kind == "db3" else set())
         for path in files:
-            if kind == "mcap":
+            if fmt.kind == "mcap":
                 repaired = _repair_mcap(path)
                 partial, changed = partial or repaired, changed or repaired
             else:
                 changed = True
                 _roll_back(path)
-        messages = _write_metadata(directory, files, kind)
+        messages = _write_metadata(directory, files, fmt)
     except OSError as err:
         if not changed:
             shutil.rmtree(backup, ignore_errors=True)
@@ -66,9 +56,7 @@ def reindex_rosbag2(given: Path) -> ReindexResult:
     return ReindexResult(directory, backup, messages, 0, partial)
 
 
-def _complete(directory: Path, files: list[Path]) -> bool:
-    from rostool.bag.reindex import mcap_complete
-
+def _complete(directory: Path, files: list[Path], fmt: BagFormat) -> bool:
     metadata = directory / "metadata.yaml"
     if not metadata.is_file():
         return False
@@ -78,18 +66,18 @@ def _complete(directory: Path, files: list[Path]) -> bool:
         return False
     if sorted(listed) != files or any(p.with_name(p.name + "-journal").exists() for p in files):
         return False
-    return all(mcap_complete(p) for p in files if p.suffix == ".mcap")
+    return fmt.kind != "mcap" or all(mcap_complete(p) for p in files)
 
 
-def _keep_originals(directory: Path, backup: Path, copy_db3: bool) -> None:
-    """Hard links keep the originals of files that are replaced, never changed in place; a .db3 whose
-    journal will be rolled back into it is copied."""
+def _keep_originals(directory: Path, backup: Path, copied: set[Path]) -> None:
+    """Hard links keep the originals of files that are replaced, never changed in place; the `copied`
+    ones (a .db3 whose journal will be rolled back into it) are copied."""
     backup.mkdir()
     for path in sorted(directory.iterdir()):
         if not path.is_file():
             continue
         target = backup / path.name
-        if copy_db3 and path.suffix == ".db3":
+        if path in copied:
             shutil.copy2(path, target)
             continue
         try:
@@ -100,13 +88,11 @@ def _keep_originals(directory: Path, backup: Path, copy_db3: bool) -> None:
 
 def _repair_mcap(path: Path) -> bool:
     """Rewrite an .mcap cut short (no footer) with every complete record; True when it was cut short."""
-    from rostool.bag.reindex import mcap_complete, reindex_mcap
-
     if mcap_complete(path):
         return False
     tmp = path.with_name(f".{path.name}.reindex-{os.getpid()}")
     try:
-        reindex_mcap(path, tmp)
+        rebuild_mcap(path, tmp)
         os.replace(tmp, path)
     except BaseException:
         tmp.unlink(missing_ok=True)
@@ -127,17 +113,15 @@ def _roll_back(path: Path) -> None:
         raise RostoolError(f"{path}: the database is damaged beyond a rollback: {verdict}")
 
 
-def _write_metadata(directory: Path, files: list[Path], kind: str) -> int:
+def _write_metadata(directory: Path, files: list[Path], fmt: BagFormat) -> int:
     from rosbags.interfaces import ConnectionExtRosbag2
     from rosbags.rosbag2.metadata import dump_qos_v8
-    from rosbags.rosbag2.storage_mcap import McapReader
-    from rosbags.rosbag2.storage_sqlite3 import Sqlite3Reader
 
     topics: dict[tuple[str, str], dict[str, Any]] = {}
     entries = []
     start_all, end_all = 2**63 - 1, 0
     for path in files:
-        storage = McapReader(path) if kind == "mcap" else Sqlite3Reader(path)
+        storage = fmt.reader(path)
         with guard(path):
             storage.open()
             try:
@@ -173,7 +157,7 @@ def _write_metadata(directory: Path, files: list[Path], kind: str) -> int:
         start_all = end_all = 0
     body = {
         "version": METADATA_VERSION,
-        "storage_identifier": "mcap" if kind == "mcap" else "sqlite3",
+        "storage_identifier": fmt.storage,
         "relative_file_paths": [path.name for path in files],
         **_span("", start_all, end_all, total),
         "topics_with_message_count": list(topics.values()),
@@ -184,7 +168,7 @@ def _write_metadata(directory: Path, files: list[Path], kind: str) -> int:
         "ros_distro": "rostool",
     }
     body.pop("path")
-    _dump(directory / "metadata.yaml", {"rosbag2_bagfile_information": body})
+    write_metadata(directory, body)
     return total
 
 
@@ -195,11 +179,3 @@ def _span(name: str, start: int, end: int, count: int) -> dict[str, Any]:
         "duration": {"nanoseconds": max(0, end - start)},
         "message_count": count,
     }
-
-
-def _dump(path: Path, data: dict[str, Any]) -> None:
-    import yaml
-
-    tmp = path.with_name(f".{path.name}.tmp")
-    tmp.write_text(yaml.safe_dump(data, default_flow_style=False, sort_keys=False))
-    os.replace(tmp, path)
