@@ -8,8 +8,7 @@ import sys
 
 import click
 
-from rostool.commands._common import json_option, print_json
-from rostool.commands.srv import interfaces_option
+from rostool.commands._common import interfaces_option, json_option, print_json
 from rostool.errors import RostoolError
 
 KINDS = ("msg", "srv", "action")

@@ -5,8 +5,7 @@ from __future__ import annotations
 
 import click
 
-from rostool.commands._common import interface_style, json_option, print_json
-from rostool.commands.srv import interfaces_option
+from rostool.commands._common import interface_style, interfaces_option, json_option, print_json
 from rostool.errors import RostoolError
 
 
