@@ -18,7 +18,7 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from operator import attrgetter
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -37,34 +37,29 @@ class NotColumnar(Exception):
     """This message's layout cannot be read column-wise (it is decoded message by message)."""
 
 
-@dataclass(frozen=True)
-class _Scalar:
+class _Scalar(NamedTuple):
     offset: int
     dtype: str  # numpy dtype of the field on the wire
 
 
-@dataclass(frozen=True)
-class _Bytes:
+class _Bytes(NamedTuple):
     """A string (decoded as UTF-8) or a byte array: `length` bytes at `offset`."""
 
     offset: int
     length: int
 
 
-@dataclass(frozen=True)
-class _PrimitiveList:
+class _PrimitiveList(NamedTuple):
     offset: int
     count: int
     dtype: str
 
 
-@dataclass(frozen=True)
-class _StringList:
+class _StringList(NamedTuple):
     items: tuple[_Bytes, ...]
 
 
-@dataclass(frozen=True)
-class _Stamp:
+class _Stamp(NamedTuple):
     sec: _Scalar
     nanosec: _Scalar
 

@@ -127,7 +127,11 @@ class Failure:
     exit_code: int = 1
 
 
-def call(func: Callable[[BagItem], T], item: BagItem) -> T | Failure:
+Work = Callable[[BagItem], T]  # one bag's job: a module-level function (it may run in another process)
+Results = Iterator[tuple[BagItem, T | Failure]]  # each bag with its job's result, in the bags' order
+
+
+def call(func: Work[T], item: BagItem) -> T | Failure:
     """func(item), or the Failure its one-line error describes. A bag in object storage is first copied into
     a local temporary directory (removed after), and errors name it by its URI."""
     try:
@@ -161,7 +165,7 @@ def _on_sigint(signum: int, frame: object) -> None:
         raise KeyboardInterrupt
 
 
-def _worker_call(func: Callable[[BagItem], T], item: BagItem) -> T | Failure:
+def _worker_call(func: Work[T], item: BagItem) -> T | Failure:
     global _busy, _interrupted
     _busy, _interrupted = True, False
     try:
@@ -173,12 +177,8 @@ def _worker_call(func: Callable[[BagItem], T], item: BagItem) -> T | Failure:
 
 
 def run(
-    func: Callable[[BagItem], T],
-    items: Sequence[BagItem],
-    jobs: int | None,
-    label: str = "bags",
-    bar: bool = True,
-) -> Iterator[tuple[BagItem, T | Failure]]:
+    func: Work[T], items: Sequence[BagItem], jobs: int | None, label: str = "bags", bar: bool = True
+) -> Results[T]:
     """(item, func(item) or its Failure) for every bag, in the order of `items`. `func` must be a module-level
     function (it runs in worker processes when jobs > 1)."""
     if jobs is None:  # starting worker processes costs ~0.5 s: worth it only for enough data
@@ -253,13 +253,13 @@ class _Progress:
 
 
 def successes(
-    func: Callable[[BagItem], T],
+    func: Work[T],
     items: Sequence[BagItem],
     jobs: int | None,
     label: str = "bags",
     keep_going: bool = False,
     bar: bool = True,
-    runner: Callable[..., Iterator[tuple[BagItem, T | Failure]]] | None = None,
+    runner: Callable[..., Results[T]] | None = None,
 ) -> Iterator[tuple[BagItem, T]]:
     """`run`, keeping what succeeded. The first failure (in the bags' order) is the command's one-line
     error and ends the other workers; with `keep_going` each failure is one line on stderr as it comes,

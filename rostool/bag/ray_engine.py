@@ -17,7 +17,7 @@ from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from typing import Any, TypeVar
 
-from rostool.bag.many import BagItem, Failure, call
+from rostool.bag.many import BagItem, Failure, Results, Work, call
 from rostool.errors import RostoolError
 
 T = TypeVar("T")
@@ -63,16 +63,11 @@ def session(address: str | None) -> Iterator[Any]:
         ray.shutdown()
 
 
-def runner(address: str | None) -> Callable[..., Iterator[tuple[BagItem, Any]]]:
-    """A `many.run` look-alike whose bags are Ray tasks."""
+def runner(address: str | None) -> Callable[..., Results[Any]]:
+    """A `many.run` look-alike whose bags are Ray tasks (Ray spreads and reports them: the local
+    engine's jobs, label and progress bar do not apply)."""
 
-    def run(
-        func: Callable[[BagItem], T],
-        items: Sequence[BagItem],
-        jobs: int | None,
-        label: str = "",
-        bar: bool = True,
-    ) -> Iterator[tuple[BagItem, T | Failure]]:
+    def run(func: Work[T], items: Sequence[BagItem], *_local: object) -> Results[T]:
         with session(address) as ray:
             task = ray.remote(num_cpus=1, max_retries=0)(call)
             refs = [task.remote(func, item) for item in items]
