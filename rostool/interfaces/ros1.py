@@ -8,6 +8,7 @@ into a store of its own, so two different definitions of one name never clash.
 from __future__ import annotations
 
 import threading
+from collections.abc import Mapping
 from dataclasses import dataclass
 from functools import lru_cache
 from typing import TYPE_CHECKING, Any
@@ -100,6 +101,11 @@ class TypeRegistry:
         with self._lock:
             self._known[key] = found
         return found
+
+    def from_header(self, header: Mapping[str, str]) -> Ros1Type:
+        """The type a TCPROS connection header announces (its type, md5sum and message definition)."""
+        definition = header.get("message_definition")
+        return self.resolve(header.get("type", "*"), header.get("md5sum", "*"), definition)
 
     @staticmethod
     def _from_definition(name: str, definition: str) -> Ros1Type:

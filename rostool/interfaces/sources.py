@@ -1,4 +1,5 @@
-"""ROS 1 interface definitions from source trees (.msg/.srv/.action), parsed and hashed as genmsg does.
+"""ROS 1 interface definitions from source trees (.msg/.srv/.action): found, parsed (msgspec.py) and
+hashed as genmsg does.
 
 Where a type comes from, first match wins:
   1. `--interfaces PATH` (repeatable): a workspace, a package, a folder of packages, or one file;

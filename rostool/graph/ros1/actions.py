@@ -183,15 +183,9 @@ class ActionClient:
         registry = self.graph.types
 
         def on_payload(payload: bytes, link: InboundLink) -> None:
-            header = link.header
-            md5sum = header.get("md5sum", "*")
             try:
-                if md5sum == expected.md5sum:
-                    msg_type = expected
-                else:
-                    msg_type = registry.resolve(
-                        header.get("type", "*"), md5sum, header.get("message_definition")
-                    )
+                ours = link.header.get("md5sum", "*") == expected.md5sum
+                msg_type = expected if ours else registry.from_header(link.header)
                 message = msg_type.deserialize(payload)
             except Exception:  # a message we cannot read must not end the connection thread
                 return

@@ -130,9 +130,7 @@ class Ros1Core:
             header = link.header
 
             def decode(payload: bytes) -> Any:
-                msg_type = registry.resolve(
-                    header.get("type", "*"), header.get("md5sum", "*"), header.get("message_definition")
-                )
+                msg_type = registry.from_header(header)
                 decoders[link.id] = msg_type.deserialize
                 return msg_type.deserialize(payload)
 
