@@ -23,6 +23,8 @@ if TYPE_CHECKING:
 
 
 class Ros1Graph(Ros1Core):
+    """`Graph` on a ROS 1 master; verbs print as the ROS 1 tools do (style "ros1")."""
+
     ros_version = 1
     style: Literal["ros1", "ros2"] = "ros1"
     encoding: Encoding = "ros1"
