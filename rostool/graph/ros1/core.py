@@ -6,7 +6,7 @@ from __future__ import annotations
 import contextlib
 import time
 from collections.abc import Callable, Sequence
-from typing import Any
+from typing import Any, TypeVar
 
 from rostool.errors import RostoolError
 from rostool.graph.base import Connection, NodeInfo, Publisher, Received, Subscription, TopicInfo
@@ -17,6 +17,8 @@ from rostool.graph.ros1.node import Node
 from rostool.graph.ros1.topics import InboundLink
 from rostool.interfaces.ros1 import Ros1Type, TypeRegistry
 from rostool.interfaces.sources import Interfaces, interfaces
+
+C = TypeVar("C", bound="Ros1Core")
 
 
 class Ros1Core:
@@ -36,7 +38,7 @@ class Ros1Core:
             self._node = Node(self._node_name, anonymous=True)
         return self._node
 
-    def __enter__(self) -> Ros1Core:
+    def __enter__(self: C) -> C:
         return self
 
     def __exit__(self, *_exc: object) -> None:
