@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import functools
 import sys
-from collections.abc import Callable, Iterable, Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Literal
@@ -81,15 +81,35 @@ def echo_names(names: Sequence[str], count: bool) -> None:
     click.echo(str(len(names)) if count else "\n".join(names), nl=count or bool(names))
 
 
-def echo_announced_types(kind: str, name: str, announced: Iterable[tuple[str, str | None]]) -> None:
-    """ros2 service/action type: the type(s) announced for the resolved NAME, else nothing on stdout and an
-    error (exit 1)."""
-    from rostool.errors import RostoolError
+def announced_type_verb(
+    kind: str,
+    help_text: str,
+    announced: Callable[[Graph], list[tuple[str, str | None]]],
+    ros1_type: Callable[[Graph, str], str] | None = None,
+) -> click.Command:
+    """`service type` / `action type`: the type(s) the graph announces for NAME (`announced`: name, type
+    pairs), else nothing on stdout and an error (exit 1), as ros2 service/action type; where ROS 1 asks the
+    thing itself (`ros1_type`), that answer."""
 
-    types = sorted({type_name for found, type_name in announced if found == name and type_name})
-    if not types:
-        raise RostoolError(f"unknown {kind} {name}: no server announces it (`rostool {kind} list`)")
-    click.echo("\n".join(types))
+    @click.command("type", help=help_text)
+    @click.argument("name", metavar=kind.upper())
+    @ignored_ros2_options("no_daemon", "spin_time", "use_sim_time")
+    @click.pass_context
+    def type_(ctx: click.Context, name: str) -> None:
+        from rostool.errors import RostoolError
+
+        with live_graph(ctx) as graph:
+            if ros1_type is not None and graph.style == "ros1":
+                click.echo(ros1_type(graph, name))
+                return
+            resolved = graph.resolve(name)
+            pairs = announced(graph)
+        types = sorted({type_name for found, type_name in pairs if found == resolved and type_name})
+        if not types:
+            raise RostoolError(f"unknown {kind} {resolved}: no server announces it (`rostool {kind} list`)")
+        click.echo("\n".join(types))
+
+    return type_
 
 
 def print_json(value: Any) -> None:
