@@ -32,7 +32,7 @@ from cyclonedds._clayer import ddspy_write
 from rostool.graph.ros2.actions import FEEDBACK_QOS
 from rostool.interfaces.ros2_action import register_action
 from rostool.graph.ros2.graph import Ros2Graph
-from rostool.graph.ros2.names import topic_to_dds
+from rostool.graph.ros2_base.names import topic_to_dds
 from rostool.graph.ros2.services import ServiceServer
 from rostool.interfaces.fill import build_message
 

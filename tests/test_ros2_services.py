@@ -20,7 +20,7 @@ from tests.test_ros2_graph import ros2_env
 
 DEMO_NODE = r"""
 import sys
-from rostool.graph.ros2 import params as P
+from rostool.graph.ros2_base import params as P
 from rostool.graph.ros2.graph import Ros2Graph
 from rostool.graph.ros2.services import ServiceServer
 from rostool.interfaces.fill import build_message

@@ -30,7 +30,7 @@ import sys, time
 from cyclonedds._clayer import ddspy_write
 from rostool.graph.ros2 import dds, type_description
 from rostool.graph.ros2.graph import Ros2Graph
-from rostool.graph.ros2.names import topic_to_dds
+from rostool.graph.ros2_base.names import topic_to_dds
 from rostool.interfaces.fill import build_message
 
 graph = Ros2Graph("raw", anonymous=False, interface_paths=[sys.argv[1]])

@@ -6,8 +6,9 @@ import pytest
 from rosbags.typesys import Stores, get_typestore
 
 from rostool.errors import RostoolError
-from rostool.graph.ros2 import dds, names
+from rostool.graph.ros2 import dds
 from rostool.graph.ros2.discovery import NodeEntry, decode_entities_info, encode_entities_info
+from rostool.graph.ros2_base import names
 
 GUID = bytes(range(1, 17))
 READER = bytes(range(16, 32))

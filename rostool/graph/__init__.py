@@ -71,15 +71,9 @@ def open_graph(
 
 
 def _ros2_graph(backend: str | None, node_name: str, interface_paths: Sequence[str]) -> Graph:
-    from rostool.graph.rclpy.select import choose
+    from rostool.graph.backends import open_ros2
 
-    if choose(backend).backend == "rclpy":
-        from rostool.graph.rclpy.graph import RclpyGraph
-
-        return RclpyGraph(node_name, interface_paths=interface_paths)
-    from rostool.graph.ros2.graph import Ros2Graph
-
-    return Ros2Graph(node_name, interface_paths=interface_paths)
+    return open_ros2(backend, node_name, interface_paths)[1]
 
 
 def daemon_allowed() -> bool:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Literal, Protocol
+from typing import TYPE_CHECKING, Any, Literal, Protocol, TypedDict
 
 if TYPE_CHECKING:
     from rostool.graph.qos import QosRequest
@@ -49,6 +49,90 @@ class ActionSummary:
     type: str
     servers: list[str]
     clients: list[str]
+
+
+class ActionInfo(TypedDict, total=False):
+    """`action_info`'s facts (an ActionSummary's fields; ROS 1 adds the goals its status topic lists)."""
+
+    name: str
+    type: str
+    servers: list[str]
+    clients: list[str]
+    goals: list[dict[str, Any]] | None
+
+
+class EndpointQos(TypedDict):
+    reliability: str | None
+    durability: str | None
+    depth: int | None
+
+
+class TopicEndpoint(TypedDict):
+    """One row of `topic_endpoints` (ros2 topic info -v): a publisher or subscription of the topic."""
+
+    node: str
+    endpoint_type: str  # "PUBLISHER" or "SUBSCRIPTION"
+    type: str
+    type_hash: str | None
+    gid: str  # dotted hex
+    qos: EndpointQos
+
+
+class ServiceEndpointFacts(TypedDict):
+    gid: str
+    is_writer: bool
+    qos: EndpointQos
+
+
+class ServiceSide(TypedDict):
+    """A client or server of a service: its node, type, type hash and request/reply endpoints."""
+
+    node: str
+    endpoint_type: str  # "CLIENT" or "SERVER"
+    type: str
+    type_hash: str | None
+    endpoints: dict[str, ServiceEndpointFacts]  # "request" and/or "reply"
+
+
+class ServiceInfo(TypedDict):
+    """`service_info`'s facts (ros2 service info): the service's types, clients and servers."""
+
+    name: str
+    types: list[str]
+    clients: list[ServiceSide]
+    servers: list[ServiceSide]
+
+
+@dataclass
+class GoalEvent:
+    """One moment of a goal as its renderer shows it: feedback, a status change or the result; the status
+    is named as the backend's ROS version names it."""
+
+    kind: str  # "feedback", "status" or "result"
+    status: int
+    status_name: str
+    message: Any = None  # the feedback or result message
+    text: str = ""
+
+
+@dataclass
+class GoalOutcome:
+    """How a goal ended (`send_goal`): status None when the server did not accept it."""
+
+    goal_id: str
+    status: int | None
+    result: Any = None
+    text: str = ""
+    canceled: bool = False
+    succeeded: bool = False
+
+
+@dataclass
+class CancelingGoal:
+    """A goal the action server says it is canceling (`cancel_goals`)."""
+
+    goal_id: str  # hex
+    stamp: Any  # when the server accepted the goal (the version's time message)
 
 
 class Received:
@@ -101,7 +185,7 @@ class GoalWatcher(Protocol):
     """What a goal's progress is told to (the style's renderer)."""
 
     def sent(self, goal_id: str, goal: Any = None, accepted: bool = True) -> None: ...
-    def event(self, event: Any) -> None: ...  # feedback, status or result: .kind .status_name .message
+    def event(self, event: GoalEvent) -> None: ...
     def waiting(self, text: str) -> None: ...
     def canceling(self, goal_id: str) -> None: ...
 
@@ -128,7 +212,7 @@ class Graph(Protocol):
     # topics
     def topics(self) -> list[TopicInfo]: ...
     def topic_type(self, name: str) -> str | None: ...
-    def topic_endpoints(self, name: str) -> list[dict[str, Any]]: ...  # ros2 topic info -v's rows
+    def topic_endpoints(self, name: str) -> list[TopicEndpoint]: ...  # ros2 topic info -v's rows
     def subscribe(
         self,
         topic: str,
@@ -150,20 +234,20 @@ class Graph(Protocol):
     def service_uri(self, name: str) -> str: ...
     def service_nodes(self, name: str) -> list[str]: ...
     def service_args(self, name: str) -> str: ...
-    def service_info(self, name: str) -> dict[str, Any] | None: ...  # what the style's info prints
+    def service_info(self, name: str) -> ServiceInfo | None: ...  # what the style's info prints
     def find_services(self, type_name: str) -> list[str]: ...
     # call with the command-line values (in the style's forms): (request, response)
     def service_call(self, name: str, values: tuple[str, ...], wait: bool, timeout: float | None) -> Any: ...
 
     # actions: summaries have name, type, servers, clients
     def actions(self) -> list[ActionSummary]: ...
-    def action_info(self, name: str, wait: float) -> dict[str, Any]: ...
-    # follow a goal to its result (canceled first on timeout or Ctrl+C); the outcome has `.succeeded`
+    def action_info(self, name: str, wait: float) -> ActionInfo: ...
+    # follow a goal to its result (canceled first on timeout or Ctrl+C)
     def send_goal(
         self, name: str, kind: str | None, goal: Any, timeout: float | None, w: GoalWatcher
-    ) -> Any: ...
+    ) -> GoalOutcome: ...
     # cancel one goal or all: the goals the server says it is canceling (where it says so)
-    def cancel_goals(self, name: str, goal_id: str | None) -> list[Any]: ...
+    def cancel_goals(self, name: str, goal_id: str | None) -> list[CancelingGoal]: ...
 
     # parameters: per node (ROS 1: NODE, when given, is a namespace of the one parameter server)
     def parameters(self, node: str | None, timeout: float = 5.0) -> Parameters: ...

@@ -8,13 +8,10 @@ identifies one publisher connection cheaply: a TCPROS link in ROS 1, the topic's
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from typing import TYPE_CHECKING, Any, Literal, Protocol
+from collections.abc import Callable, Sequence
+from typing import Any, Literal, Protocol
 
 from rostool.errors import RostoolError
-
-if TYPE_CHECKING:
-    from rostool.graph.base import Graph
 
 Encoding = Literal["ros1", "cdr"]
 Put = Callable[[str, bytes, Any], None]
@@ -38,7 +35,18 @@ class RecordSource(Protocol):
     def close(self) -> None: ...
 
 
-def subscribed_by(graph: Graph, node: str) -> list[str]:
+class _Topic(Protocol):
+    name: str
+    subscribers: list[str]
+
+
+class TopicLister(Protocol):
+    """What `subscribed_by` asks of a graph (a Graph is one)."""
+
+    def topics(self) -> Sequence[_Topic]: ...
+
+
+def subscribed_by(graph: TopicLister, node: str) -> list[str]:
     """The topics `node` subscribes to now; none while the graph does not answer."""
     try:
         return [t.name for t in graph.topics() if node in t.subscribers]

@@ -15,10 +15,18 @@ from typing import TYPE_CHECKING, Any, Literal
 from rostool.graph.daemon.client import DaemonAbsent, DaemonClient, DaemonSilent, OtherBuild
 from rostool.graph.daemon.place import PlaceRefused
 from rostool.graph.daemon.queries import SERVED
-from rostool.graph.ros2.names import resolve
+from rostool.graph.ros2_base.names import resolve
 
 if TYPE_CHECKING:
-    from rostool.graph.base import ActionSummary, Graph, NodeInfo, TopicInfo
+    from rostool.graph.base import (
+        ActionInfo,
+        ActionSummary,
+        Graph,
+        NodeInfo,
+        ServiceInfo,
+        TopicEndpoint,
+        TopicInfo,
+    )
     from rostool.graph.recording import Encoding
 
 
@@ -103,7 +111,7 @@ class DaemonGraph:
     def topic_type(self, name: str) -> str | None:
         return self._ask("topic_type", resolve(name))  # type: ignore[no-any-return]
 
-    def topic_endpoints(self, name: str) -> list[dict[str, Any]]:
+    def topic_endpoints(self, name: str) -> list[TopicEndpoint]:
         return self._ask("topic_endpoints", resolve(name))  # type: ignore[no-any-return]
 
     def services(self) -> list[tuple[str, str | None, list[str]]]:
@@ -115,13 +123,13 @@ class DaemonGraph:
     def find_services(self, type_name: str) -> list[str]:
         return self._ask("find_services", type_name)  # type: ignore[no-any-return]
 
-    def service_info(self, name: str) -> dict[str, Any] | None:
+    def service_info(self, name: str) -> ServiceInfo | None:
         return self._ask("service_info", resolve(name))  # type: ignore[no-any-return]
 
     def actions(self) -> list[ActionSummary]:
         return self._ask("actions")  # type: ignore[no-any-return]
 
-    def action_info(self, name: str, wait: float) -> dict[str, Any]:
+    def action_info(self, name: str, wait: float) -> ActionInfo:
         return self._ask("action_info", resolve(name), wait)  # type: ignore[no-any-return]
 
 
@@ -129,7 +137,7 @@ def daemon_graph(requested_backend: str | None, direct: Callable[[], Graph]) -> 
     """The graph the verbs get when a daemon may serve: a DaemonGraph, or the direct backend (with one
     warning line) when the user's daemon directory is not private."""
     from rostool.graph.rclpy.select import requested
-    from rostool.graph.ros2.dds import discovery_range
+    from rostool.graph.ros2_base.env import discovery_range
 
     backend = requested(requested_backend)[0]
     discovery_range()  # a bad value fails in one line here, not in a daemon that never starts

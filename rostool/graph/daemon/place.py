@@ -91,7 +91,7 @@ def private_dir(path: Path, create: bool = True) -> Path:
 
 
 def key_fields(backend: str, env: Mapping[str, str] = os.environ) -> tuple[tuple[str, str], ...]:
-    from rostool.graph.ros2.dds import domain_id
+    from rostool.graph.ros2_base.env import domain_id
 
     fields = [("backend", backend), ("domain", str(domain_id(env))), ("python", sys.executable)]
     fields += [(name, env[name]) for name in KEY_VARIABLES if name != "ROS_DOMAIN_ID" and env.get(name)]

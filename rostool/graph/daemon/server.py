@@ -53,17 +53,9 @@ class Daemon:
 
     # --- the graph -------------------------------------------------------------------------------
     def open_graph(self) -> None:
-        from rostool.graph.rclpy.select import choose
+        from rostool.graph.backends import open_ros2
 
-        self.backend = choose(None if self.requested == "auto" else self.requested).backend
-        if self.backend == "rclpy":
-            from rostool.graph.rclpy.graph import RclpyGraph
-
-            self.graph = RclpyGraph(NODE_NAME)
-        else:
-            from rostool.graph.ros2.graph import Ros2Graph
-
-            self.graph = Ros2Graph(NODE_NAME)
+        self.backend, self.graph = open_ros2(None if self.requested == "auto" else self.requested, NODE_NAME)
         self.graph.require_peers = False  # an empty graph is an empty answer, as ros2's daemon gives
         self.graph.wait_for_discovery()
         log.info("graph of %s (%s backend) ready", dict(self.place.fields)["domain"], self.backend)

@@ -14,28 +14,27 @@ from typing import TYPE_CHECKING, Any
 
 from rostool.errors import RostoolError
 from rostool.graph.rclpy import types as rtypes
-from rostool.graph.ros2 import actions as ros2_actions
-from rostool.graph.ros2.actions import (
-    ACTION_INFIX,
-    CANCEL_ERRORS,
-    CANCEL_SERVICE,
+from rostool.graph.ros2_base.actions import (
     CANCEL_WAIT,
-    ActionSummary,
-    CancelingGoal,
-    GoalEvent,
-    GoalOutcome,
+    WAITING,
     GoalTimeout,
+    action_type,
+    cancel,
+    check_canceled,
+    feedback_event,
+    outcome,
+    result_event,
 )
-from rostool.graph.ros2.names import resolve
+from rostool.graph.ros2_base.names import resolve
 from rostool.interfaces import ros2_action
 from rostool.interfaces.ros2_action import ActionTypes
 
 if TYPE_CHECKING:
-    from rostool.graph.base import GoalWatcher
-    from rostool.graph.rclpy.graph import RclpyGraph
+    from rostool.graph.base import GoalOutcome, GoalWatcher
+    from rostool.graph.rclpy.host import RclpyHost
 
 
-def register_action(graph: RclpyGraph, action_type: str) -> tuple[ActionTypes, Any]:
+def register_action(graph: RclpyHost, action_type: str) -> tuple[ActionTypes, Any]:
     """The action's store names (built in, from .action sources, else described from rclpy's classes) and
     the class rclpy imports."""
     name = ros2_action.action_store_name(action_type)
@@ -68,49 +67,12 @@ def _server_ready(client: Any, deadline: float) -> bool:
     return True
 
 
-def list_actions(graph: RclpyGraph) -> list[ActionSummary]:
-    """Actions with a server (a `<action>/_action/send_goal` service), with their client nodes."""
-    found: dict[str, ActionSummary] = {}
-    for name, type_, servers, clients in graph.service_endpoints():
-        split = ros2_actions.split_action_service(name)
-        if split is None or split[1] != "send_goal":
-            continue
-        found[split[0]] = ActionSummary(split[0], type_.removesuffix("_SendGoal"), servers, clients)
-    return [found[name] for name in sorted(found)]
-
-
-def cancel_goals(graph: RclpyGraph, name: str, goal_id: str | None) -> list[CancelingGoal]:
-    action = graph.resolve(name)
-    wanted = ros2_actions.parse_goal_id(goal_id) if goal_id is not None else bytes(16)
-    response = _cancel(graph, action, wanted, 5.0)
-    what = f"goal {wanted.hex()}" if goal_id is not None else "every goal"
-    if response.return_code != 0:
-        why = CANCEL_ERRORS.get(response.return_code, f"return code {response.return_code}")
-        raise RostoolError(f"canceling {what} of {action} failed: {why}")
-    return [CancelingGoal(bytes(g.goal_id.uuid).hex(), g.stamp) for g in response.goals_canceling]
-
-
-def _cancel(graph: RclpyGraph, action: str, goal_id: bytes, timeout: float) -> Any:
-    """Ask the action's server to cancel `goal_id` (all zeros: every goal); the CancelGoal response."""
-    client = graph.service_client(action + ACTION_INFIX + "cancel_goal", CANCEL_SERVICE)
-    try:
-        if not client.wait_for_server(timeout):
-            raise RostoolError(
-                f"no action server for {action} matched within {timeout:g} s (see `rostool action list`)"
-            )
-        info = {"goal_id": {"uuid": list(goal_id)}}  # the stamp stays zero: no "goals accepted before"
-        request = graph.build_message(CANCEL_SERVICE + "_Request", {"goal_info": info})
-        return client.call(request, timeout)
-    finally:
-        client.close()
-
-
 class GoalRun:
     """One `action send-goal`: the DDS backend's steps and lines, on rclpy's ActionClient."""
 
     def __init__(
         self,
-        graph: RclpyGraph,
+        graph: RclpyHost,
         name: str,
         kind: str | None,
         value: Any,
@@ -121,15 +83,7 @@ class GoalRun:
         self.action = resolve(name)
         self.timeout = timeout
         self.watcher = w
-        if kind is None:
-            found = next((a for a in graph.actions() if a.name == self.action), None)
-            if found is None:
-                raise RostoolError(
-                    f"unknown action {self.action}: no server announces it (see `rostool action list`); "
-                    "give its TYPE after the name to wait for a server"
-                )
-            kind = found.type
-        self.types, self.cls = register_action(graph, kind)
+        self.types, self.cls = register_action(graph, action_type(graph, self.action, kind))
         self.goal = self._build_goal(value)  # bad values fail here, before anything is sent
         self.feedback: queue.SimpleQueue[Any] = queue.SimpleQueue()
 
@@ -152,7 +106,7 @@ class GoalRun:
                 feedback = self.feedback.get_nowait()
             except queue.Empty:
                 return
-            self.watcher.event(GoalEvent("feedback", 2, feedback))
+            self.watcher.event(feedback_event(feedback))
 
     def run(self) -> GoalOutcome:
         from rclpy.action import ActionClient
@@ -163,7 +117,7 @@ class GoalRun:
         started = time.monotonic()
         limit = self.timeout if self.timeout is not None else float("inf")
         if not _server_ready(client, started + min(limit, 1.0)):
-            watcher.waiting("Waiting for an action server to become available...")
+            watcher.waiting(WAITING)
             if not _server_ready(client, started + limit):
                 raise RostoolError(f"no action server for {action} matched within {self.timeout:g} s")
         goal_id = uuid.uuid4().bytes
@@ -178,7 +132,7 @@ class GoalRun:
             handle = sent.result()
             watcher.sent(hex_id, self.goal, bool(handle.accepted))
             if not handle.accepted:
-                return GoalOutcome(hex_id, None)
+                return outcome(hex_id, None)
             result_future = handle.get_result_async()
             done = threading.Event()
             result_future.add_done_callback(lambda _f: done.set())
@@ -190,20 +144,17 @@ class GoalRun:
             watcher.canceling(hex_id)
             if result_future is None:  # maybe never sent, or not accepted: cancel what the server may have
                 with contextlib.suppress(RostoolError):
-                    _cancel(graph, action, goal_id, CANCEL_WAIT)
+                    cancel(graph, action, goal_id, CANCEL_WAIT)
                 raise
-            response = _cancel(graph, action, goal_id, 5.0)
-            if response.return_code != 0 or not response.goals_canceling:
-                why = CANCEL_ERRORS.get(response.return_code, f"return code {response.return_code}")
-                raise RostoolError(f"canceling goal {hex_id} failed: {why}") from None
+            check_canceled(cancel(graph, action, goal_id, 5.0), hex_id)
             if _wait(result_future, time.monotonic() + CANCEL_WAIT):  # how the goal ended
                 final = self._result(result_future)
-                watcher.event(GoalEvent("result", int(final.status), final.result))
+                watcher.event(result_event(int(final.status), final.result))
             raise
         self._drain()  # feedback that came with the result
         final = self._result(result_future)
-        watcher.event(GoalEvent("result", int(final.status), final.result))
-        return GoalOutcome(hex_id, int(final.status), final.result)
+        watcher.event(result_event(int(final.status), final.result))
+        return outcome(hex_id, int(final.status), final.result)
 
     def _result(self, future: Any) -> Any:
         if future.exception() is not None:

@@ -53,13 +53,13 @@ def rclpy_range(env: Mapping[str, str] = os.environ) -> tuple[str, str]:
 
 def report(choice: Choice, env: Mapping[str, str] = os.environ) -> dict[str, Any]:
     """The facts for one ROS 2 backend choice, as `doctor --json` prints them."""
-    from rostool.graph.ros2 import dds
+    from rostool.graph.ros2_base import env as ros2_env
 
     facts: dict[str, Any] = {
         "backend": choice.backend, "asked": choice.asked, "asked_by": choice.source, "reason": choice.reason,
     }  # fmt: skip
     try:
-        facts["domain_id"] = dds.domain_id(env)
+        facts["domain_id"] = ros2_env.domain_id(env)
         facts["domain_id_from"] = "ROS_DOMAIN_ID" if env.get("ROS_DOMAIN_ID", "").strip() else "default"
     except Exception as err:
         facts["domain_id"], facts["domain_id_from"] = None, str(err)
@@ -98,7 +98,7 @@ def _rclpy_facts(env: Mapping[str, str]) -> dict[str, Any]:
 def _dds_facts(env: Mapping[str, str]) -> dict[str, Any]:
     from importlib import metadata
 
-    from rostool.graph.ros2 import dds
+    from rostool.graph.ros2_base import env as ros2_env
     from rostool.interfaces.ros2_types import distro_from_env
 
     try:
@@ -108,7 +108,10 @@ def _dds_facts(env: Mapping[str, str]) -> dict[str, Any]:
     named = env.get("ROS_DISTRO", "").strip()
     scope_set = any(env.get(k, "").strip() for k in ("ROS_AUTOMATIC_DISCOVERY_RANGE", "ROS_LOCALHOST_ONLY"))
     try:
-        scope, scope_from = dds.discovery_range(env), "ROS_AUTOMATIC_DISCOVERY_RANGE / ROS_LOCALHOST_ONLY"
+        scope, scope_from = (
+            ros2_env.discovery_range(env),
+            "ROS_AUTOMATIC_DISCOVERY_RANGE / ROS_LOCALHOST_ONLY",
+        )
     except Exception as err:
         scope, scope_from = None, str(err)
     return {

@@ -1,11 +1,11 @@
-"""QoS between rostool's profiles (the DDS backend's QosProfile, which the verbs' --qos-* become) and
+"""QoS between rostool's profiles (the QosProfile the verbs' --qos-* become) and
 rclpy's, both ways."""
 
 from __future__ import annotations
 
 from typing import Any
 
-from rostool.graph.ros2.dds import QosProfile
+from rostool.graph.ros2_base.qos import QosProfile
 
 
 def to_rclpy(profile: QosProfile) -> Any:

@@ -1,107 +1,63 @@
-"""A raw rclpy subscription: waits (in its own thread) for the topic's publishers, subscribes with the QoS
-adapted to them (as the DDS backend and ros2 topic echo do), and hands on the serialized bytes.
-
-When rmw reports a publisher this subscription cannot match and the QoS was left to rostool, it subscribes
-again with the QoS adapted to every publisher now known; otherwise it warns, or fails when no publisher
-can serve it, as the DDS backend does.
-"""
+"""A raw rclpy subscription: the shared draining subscription (ros2_base/subscription.py) reading
+serialized messages through rclpy, in its own thread where rclpy's internals allow it."""
 
 from __future__ import annotations
 
 import contextlib
 import threading
-import time
 from collections.abc import Callable
-from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
-from rostool.errors import RostoolError
-from rostool.graph.base import Received
 from rostool.graph.rclpy import types as rtypes
-from rostool.graph.rclpy.qos import from_rclpy, to_rclpy
-from rostool.graph.ros2 import dds
+from rostool.graph.rclpy.qos import to_rclpy
+from rostool.graph.ros2_base.subscription import DrainingSubscription
 
 if TYPE_CHECKING:
-    from rostool.graph.rclpy.graph import RclpyGraph
+    from rostool.graph.base import Received
+    from rostool.graph.rclpy.host import RclpyHost
+    from rostool.graph.ros2_base.qos import QosProfile
+    from rostool.graph.ros2_base.transport import EndpointView
 
-READER_CACHE_DEPTH = 1000  # a deep local history lets a busy moment pass without losing samples
-SUBSCRIBERS_ONLY_WAIT = 0.5  # a topic with subscribers only: how long publishers are given to appear
 
+class RclpySubscription(DrainingSubscription):
+    thread_name = "rclpy sub"
+    _graph: RclpyHost
 
-class RclpySubscription:
     def __init__(
         self,
-        graph: RclpyGraph,
+        graph: RclpyHost,
         topic: str,
         on_message: Callable[[Received], None],
         on_error: Callable[[str], None],
     ) -> None:
-        self._graph = graph
-        self._topic = topic
-        self._on_message = on_message
-        self._on_error = on_error
-        self._closed = threading.Event()
         self._incompatible = threading.Event()
         self._reader: Any = None
         self._detached = False
-        self._thread = threading.Thread(target=self._run, name=f"rclpy sub {topic}", daemon=True)
-        self._thread.start()
+        self._policy = "?"
+        super().__init__(graph, topic, on_message, on_error)
 
-    def close(self) -> None:
-        self._closed.set()
+    def _wake(self) -> None:
         self._incompatible.set()
-        if threading.current_thread() is not self._thread:
-            self._thread.join(2.0)
-        self._drop()
 
-    def _run(self) -> None:
-        try:
-            chosen = self._wait_for_type()
-            if chosen is None:
-                return
-            store_name, profile = chosen
-            cls = rtypes.python_class(store_name)
-            while profile is not None and not self._closed.is_set():
-                profile = self._read_with(cls, store_name, profile)
-        except RostoolError as err:
-            self._on_error(str(err))
+    def _known_type(self, type_name: str, writers: list[EndpointView]) -> str:
+        return self._graph.store_name(type_name)
 
-    def _wait_for_type(self) -> tuple[str, dds.QosProfile] | None:
-        graph = self._graph
-        started = time.monotonic()
-        while not self._closed.is_set():
-            pubs, subs = graph._endpoints(self._topic)
-            known = pubs or subs
-            if known and (pubs or time.monotonic() - started >= SUBSCRIBERS_ONLY_WAIT):
-                store_name = graph.store_name(known[0].topic_type)
-                offered = [from_rclpy(p.qos_profile) for p in pubs]
-                profile, notes = dds.adapt_to_publishers(graph.qos_request, offered)
-                for note in notes:
-                    graph.warn(note)
-                return store_name, profile
-            self._closed.wait(0.05)
-        return None
-
-    def _read_with(self, cls: Any, store_name: str, profile: dds.QosProfile) -> dds.QosProfile | None:
+    def _read_with(self, store_name: str, profile: QosProfile) -> QosProfile | None:
         """Subscribe with `profile` until closed, or until a publisher it cannot match calls for another."""
         from rclpy.event_handler import SubscriptionEventCallbacks
 
         graph = self._graph
-        cache_profile = profile
-        if graph.qos_request.depth is None and profile.depth:
-            cache_profile = replace(profile, depth=max(profile.depth, READER_CACHE_DEPTH))
-        store, topic, deliver, clock = graph.types.store, self._topic, self._on_message, time.time_ns
-
-        def decode(payload: bytes) -> Any:
-            return store.deserialize_cdr(payload, store_name)
-
-        def on_bytes(payload: bytes) -> None:
-            deliver(Received(topic, payload, clock(), store_name, decode))
-
+        cls = rtypes.python_class(store_name)
+        on_bytes = self._receiver(store_name)
         events = SubscriptionEventCallbacks(incompatible_qos=self._on_incompatible)
         self._incompatible.clear()
         self._reader = graph.node.create_subscription(
-            cls, topic, on_bytes, to_rclpy(cache_profile), raw=True, event_callbacks=events
+            cls,
+            self._topic,
+            on_bytes,
+            to_rclpy(self._cache_profile(profile)),
+            raw=True,
+            event_callbacks=events,
         )
         taking = self._detach(self._reader)
         while not self._closed.is_set():
@@ -116,7 +72,7 @@ class RclpySubscription:
             if adapted is not None:
                 self._drop()
                 return adapted
-            self._report_incompatible(profile)
+            self._report_incompatible(self._policy.removesuffix("_QOS_POLICY"), profile)
         return None
 
     def _detach(self, reader: Any) -> bool:
@@ -169,34 +125,6 @@ class RclpySubscription:
     def _on_incompatible(self, event: Any) -> None:
         self._policy = getattr(getattr(event, "last_policy_kind", None), "name", "?")
         self._incompatible.set()
-
-    def _offered(self) -> list[dds.QosProfile]:
-        return [from_rclpy(p.qos_profile) for p in self._graph._endpoints(self._topic)[0]]
-
-    def _readapted(self, profile: dds.QosProfile) -> dds.QosProfile | None:
-        offered = self._offered()
-        if not offered:
-            return None
-        adapted, notes = dds.adapt_to_publishers(self._graph.qos_request, offered)
-        if adapted.reliability == profile.reliability and adapted.durability == profile.durability:
-            return None
-        for note in notes:
-            self._graph.warn(note)
-        return adapted
-
-    def _report_incompatible(self, profile: dds.QosProfile) -> None:
-        offered = self._offered()
-        described = sorted({qos.describe() for qos in offered})
-        offers = f"; publishers offer {'; '.join(described)}" if described else ""
-        policy = getattr(self, "_policy", "?").removesuffix("_QOS_POLICY")
-        text = (
-            f"a publisher of {self._topic} offers QoS incompatible with this subscription "
-            f"({profile.describe()}): incompatible policy {policy}{offers}"
-        )
-        if offered and not any(dds.serves(qos, profile) for qos in offered):
-            self._on_error(f"{text} (adjust --qos-reliability / --qos-durability)")
-        else:
-            self._graph.warn(f"{text}; no messages will be received from it")
 
     def _drop(self) -> None:
         reader, self._reader = self._reader, None

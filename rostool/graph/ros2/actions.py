@@ -21,86 +21,35 @@ import contextlib
 import threading
 import time
 import uuid
-from collections.abc import Callable
-from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from rostool.errors import RostoolError
-from rostool.graph.base import ActionSummary
-from rostool.graph.ros2 import dds
-from rostool.graph.ros2.names import resolve, topic_to_dds
 from rostool.graph.ros2.services import ServiceClient, remote_writer_known
+from rostool.graph.ros2_base.actions import (
+    ACTION_INFIX,
+    CANCEL_SERVICE,
+    CANCEL_WAIT,
+    WAITING,
+    GoalTimeout,
+    action_type,
+    check_canceled,
+    feedback_event,
+    outcome,
+    result_event,
+)
+from rostool.graph.ros2_base.names import resolve, topic_to_dds
+from rostool.graph.ros2_base.qos import PROFILES, QosProfile
 from rostool.interfaces.ros2_action import register_action
 
 if TYPE_CHECKING:
+    from rostool.graph.base import GoalOutcome, GoalWatcher
     from rostool.graph.ros2.graph import Ros2Graph, Session
 
-ACTION_INFIX = "/_action/"
-FEEDBACK_QOS = dds.PROFILES["default"]
-STATUS_QOS = dds.QosProfile("reliable", "transient_local", 1)
+FEEDBACK_QOS = PROFILES["default"]
+STATUS_QOS = QosProfile("reliable", "transient_local", 1)
 STATUS_ARRAY = "action_msgs/msg/GoalStatusArray"
-CANCEL_SERVICE = "action_msgs/srv/CancelGoal"
 UUID_TYPE = "unique_identifier_msgs/msg/UUID"
 _ANY_SAMPLE = 0x7F
-CANCEL_WAIT = 3.0  # after a cancel, how long to wait for the goal's final result
-
-# action_msgs/msg/GoalStatus
-STATUS_NAMES = {0: "UNKNOWN", 1: "ACCEPTED", 2: "EXECUTING", 3: "CANCELING", 4: "SUCCEEDED", 5: "CANCELED",
-                6: "ABORTED"}  # fmt: skip
-SUCCEEDED = 4
-CANCEL_ERRORS = {1: "the server rejected the cancel request", 2: "the server does not know the goal",
-                 3: "the goal already finished"}  # fmt: skip
-
-
-def status_name(status: int) -> str:
-    return STATUS_NAMES.get(status, f"status {status}")
-
-
-def split_action_service(service: str) -> tuple[str, str] | None:
-    """`/fibonacci/_action/send_goal` -> ('/fibonacci', 'send_goal'); None for other services."""
-    action, infix, rest = service.rpartition(ACTION_INFIX)
-    return (action, rest) if infix and action and "/" not in rest else None
-
-
-def list_actions(graph: Ros2Graph, nodes: bool = False) -> list[ActionSummary]:
-    """Actions with a server (a reader of `ACTION/_action/send_goal` requests), with clients (their node
-    names complete only with `nodes`)."""
-    found: dict[str, ActionSummary] = {}
-    for name, type_, servers, clients in graph.service_endpoints(nodes):
-        split = split_action_service(name)
-        if split is None or split[1] != "send_goal":
-            continue
-        action_type = type_.removesuffix("_SendGoal")
-        found[split[0]] = ActionSummary(split[0], action_type, servers, clients)
-    return [found[name] for name in sorted(found)]
-
-
-@dataclass
-class GoalEvent:
-    kind: str  # "feedback" or "result"
-    status: int
-    message: Any = None  # the feedback or result message
-    text: str = ""
-
-    @property
-    def status_name(self) -> str:
-        return status_name(self.status)
-
-
-@dataclass
-class GoalOutcome:
-    goal_id: str
-    status: int | None
-    result: Any = None
-    canceled: bool = False
-
-    @property
-    def succeeded(self) -> bool:
-        return self.status == SUCCEEDED
-
-
-class GoalTimeout(RostoolError):
-    pass
 
 
 class ActionClient:
@@ -190,33 +139,16 @@ class ActionClient:
 
 
 def send_goal(
-    graph: Ros2Graph,
-    name: str,
-    type_name: str | None,
-    value: Any,
-    timeout: float | None = None,
-    on_event: Callable[[GoalEvent], None] | None = None,
-    on_sent: Callable[[str, Any, bool], None] | None = None,
-    on_waiting: Callable[[str], None] | None = None,
-    on_cancel: Callable[[str], None] | None = None,
+    graph: Ros2Graph, name: str, kind: str | None, value: Any, timeout: float | None, watcher: GoalWatcher
 ) -> GoalOutcome:
     """`ros2 action send_goal`: the goal is canceled first on timeout or Ctrl+C."""
     action = resolve(name)
-    if type_name is None:
-        found = next((a for a in list_actions(graph) if a.name == action), None)
-        if found is None:
-            raise RostoolError(
-                f"unknown action {action}: no server announces it (see `rostool action list`); "
-                "give its TYPE after the name to wait for a server"
-            )
-        type_name = found.type
-    client = ActionClient(graph.session, action, type_name)
+    client = ActionClient(graph.session, action, action_type(graph, action, kind))
     goal = client.build_goal(value)  # bad values fail here, before anything is sent
     started = time.monotonic()
     limit = timeout if timeout is not None else float("inf")
     if not client.wait_for_server(min(limit, 1.0)):
-        if on_waiting is not None:
-            on_waiting("Waiting for an action server to become available...")
+        watcher.waiting(WAITING)
         if not client.wait_for_server(max(limit - (time.monotonic() - started), 0.0)):
             raise RostoolError(f"no action server for {action} matched within {timeout:g} s")
     goal_id = uuid.uuid4().bytes
@@ -238,80 +170,32 @@ def send_goal(
     # that comes before the server's answer (it may have accepted the goal already)
     try:
         _, accepted = client.send(goal, max(limit - (time.monotonic() - started), 0.01), goal_id)
-        if on_sent is not None:
-            on_sent(hex_id, goal, accepted)
+        watcher.sent(hex_id, goal, accepted)
         if not accepted:
-            return GoalOutcome(hex_id, None)
+            return outcome(hex_id, None)
         threading.Thread(target=fetch, name=f"result of {action}", daemon=True).start()
         fetching = True
         while not finished.wait(0.02):
             for feedback in client.take_feedback(goal_id):
-                if on_event is not None:
-                    on_event(GoalEvent("feedback", 2, feedback))
+                watcher.event(feedback_event(feedback))
             if time.monotonic() - started > limit and not finished.is_set():
                 raise GoalTimeout(f"goal {hex_id} got no result within {timeout:g} s; canceled it")
     except (KeyboardInterrupt, GoalTimeout):
-        if on_cancel is not None:
-            on_cancel(hex_id)
+        watcher.canceling(hex_id)
         if not fetching:  # maybe never sent, or not accepted: cancel what the server may have
             with contextlib.suppress(RostoolError):
                 client.cancel(goal_id, CANCEL_WAIT)
             raise
-        response = client.cancel(goal_id)
-        if response.return_code != 0 or not response.goals_canceling:
-            why = CANCEL_ERRORS.get(response.return_code, f"return code {response.return_code}")
-            raise RostoolError(f"canceling goal {hex_id} failed: {why}") from None
+        check_canceled(client.cancel(goal_id), hex_id)
         finished.wait(CANCEL_WAIT)  # the server's answer to get_result says how the goal ended
         final = box.get("response")
-        if final is not None and on_event is not None:
-            on_event(GoalEvent("result", int(final.status), final.result))
+        if final is not None:
+            watcher.event(result_event(int(final.status), final.result))
         raise
     if "error" in box:
         raise box["error"]
     response = box["response"]
     for feedback in client.take_feedback(goal_id):  # feedback that came with the result
-        if on_event is not None:
-            on_event(GoalEvent("feedback", 2, feedback))
-    if on_event is not None:
-        on_event(GoalEvent("result", int(response.status), response.result))
-    return GoalOutcome(hex_id, int(response.status), response.result)
-
-
-def parse_goal_id(text: str) -> bytes:
-    """A goal id as send-goal prints it (32 hex digits), dashed UUID spellings too."""
-    try:
-        return uuid.UUID(text.strip()).bytes
-    except ValueError:
-        raise RostoolError(
-            f"bad goal id {text!r}: give the 32 hex digits `rostool action send-goal` printed"
-        ) from None
-
-
-@dataclass
-class CancelingGoal:
-    goal_id: str  # hex
-    stamp: Any  # builtin_interfaces/msg/Time: when the server accepted the goal
-
-
-def cancel_goals(
-    graph: Ros2Graph, name: str, goal_id: str | None, timeout: float = 5.0
-) -> list[CancelingGoal]:
-    """Ask the server of action `name` to cancel one goal, or every goal when `goal_id` is None (a zero goal
-    id and a zero stamp: action_msgs/srv/CancelGoal's "cancel all"); the goals it is canceling."""
-    from rostool.interfaces.fill import build_message
-
-    action = resolve(name)
-    wanted = parse_goal_id(goal_id) if goal_id is not None else bytes(16)
-    client = ServiceClient(graph.session, action + ACTION_INFIX + "cancel_goal", CANCEL_SERVICE)
-    if not client.wait_for_server(timeout):
-        raise RostoolError(
-            f"no action server for {action} matched within {timeout:g} s (see `rostool action list`)"
-        )
-    info = {"goal_id": {"uuid": list(wanted)}}  # the stamp stays zero: no "goals accepted before"
-    request = build_message(graph.types.store, CANCEL_SERVICE + "_Request", {"goal_info": info})
-    response = client.call(request, timeout)
-    what = f"goal {wanted.hex()}" if goal_id is not None else "every goal"
-    if response.return_code != 0:
-        why = CANCEL_ERRORS.get(response.return_code, f"return code {response.return_code}")
-        raise RostoolError(f"canceling {what} of {action} failed: {why}")
-    return [CancelingGoal(bytes(g.goal_id.uuid).hex(), g.stamp) for g in response.goals_canceling]
+        watcher.event(feedback_event(feedback))
+    watcher.event(result_event(int(response.status), response.result))
+    return outcome(hex_id, int(response.status), response.result)

@@ -16,46 +16,21 @@ from __future__ import annotations
 import contextlib
 import os
 from collections.abc import Mapping
-from dataclasses import dataclass, replace
 from typing import Any
 
 from rostool.errors import RostoolError
-from rostool.graph import qos
+from rostool.graph.ros2_base.env import DOMAIN_ID_MAX as DOMAIN_ID_MAX
+from rostool.graph.ros2_base.env import RANGES as RANGES
+from rostool.graph.ros2_base.env import discovery_range as discovery_range
+from rostool.graph.ros2_base.env import domain_id as domain_id
+from rostool.graph.ros2_base.env import static_peers as static_peers
+from rostool.graph.ros2_base.qos import PROFILES as PROFILES
+from rostool.graph.ros2_base.qos import QosProfile as QosProfile
+from rostool.graph.ros2_base.qos import QosRequest as QosRequest
+from rostool.graph.ros2_base.qos import adapt_to_publishers as adapt_to_publishers
+from rostool.graph.ros2_base.qos import serves as serves
 
-DOMAIN_ID_MAX = 232  # ROS 2's documented maximum: higher ids map to UDP ports past the usable range
-RANGES = ("LOCALHOST", "SUBNET", "OFF", "SYSTEM_DEFAULT")
 MAX_PARTICIPANTS_PER_HOST = 32
-
-
-def domain_id(env: Mapping[str, str] = os.environ) -> int:
-    text = env.get("ROS_DOMAIN_ID", "").strip()
-    if not text:
-        return 0
-    try:
-        value = int(text)
-    except ValueError:
-        value = -1
-    if not 0 <= value <= DOMAIN_ID_MAX:
-        raise RostoolError(f"ROS_DOMAIN_ID={text!r} is not valid: use an integer from 0 to {DOMAIN_ID_MAX}")
-    return value
-
-
-def discovery_range(env: Mapping[str, str] = os.environ) -> str:
-    localhost_only = env.get("ROS_LOCALHOST_ONLY", "").strip()
-    if localhost_only == "1":
-        return "LOCALHOST"
-    text = env.get("ROS_AUTOMATIC_DISCOVERY_RANGE", "").strip().upper()
-    if not text:
-        return "SUBNET" if localhost_only == "0" else "LOCALHOST"
-    if text not in RANGES:
-        raise RostoolError(
-            f"ROS_AUTOMATIC_DISCOVERY_RANGE={text!r} is not valid: use one of {', '.join(RANGES)}"
-        )
-    return text
-
-
-def static_peers(env: Mapping[str, str] = os.environ) -> list[str]:
-    return [peer.strip() for peer in env.get("ROS_STATIC_PEERS", "").split(";") if peer.strip()]
 
 
 def _xml_attr(text: str) -> str:
@@ -133,78 +108,6 @@ DDS_LC_FATAL = 1
 
 
 # --- QoS -------------------------------------------------------------------------------------------
-
-
-@dataclass(frozen=True)
-class QosProfile:
-    """The ROS 2 QoS policies the verbs choose; None leaves the DDS default."""
-
-    reliability: str | None = "reliable"  # reliable | best_effort
-    durability: str | None = "volatile"  # volatile | transient_local
-    depth: int | None = 10  # keep last N; 0 = keep all
-
-    def describe(self) -> str:
-        default = "system default"
-        return f"{self.reliability or default}, {self.durability or default}, depth {self.depth}"
-
-
-def serves(writer: QosProfile, reader: QosProfile) -> bool:
-    """DDS's request/offer rule for the policies rostool sets; unset policies are DDS's defaults
-    (writers reliable, readers best effort, both volatile)."""
-    if reader.reliability == "reliable" and (writer.reliability or "reliable") != "reliable":
-        return False
-    return not (reader.durability == "transient_local" and writer.durability != "transient_local")
-
-
-# rmw's presets (rmw/qos_profiles.h), by ros2cli's short keys.
-PROFILES: dict[str, QosProfile] = {
-    "default": QosProfile("reliable", "volatile", 10),
-    "sensor_data": QosProfile("best_effort", "volatile", 5),
-    "system_default": QosProfile(None, None, None),
-    "services_default": QosProfile("reliable", "volatile", 10),
-    "parameters": QosProfile("reliable", "volatile", 1000),
-    "parameter_events": QosProfile("reliable", "volatile", 1000),
-}
-
-
-@dataclass(frozen=True)
-class QosRequest(qos.QosRequest):
-    """The user's request (rostool.graph.qos) with the DDS profiles it stands for."""
-
-    def base(self) -> QosProfile:
-        return PROFILES[self.profile or "default"]
-
-    def apply(self, profile: QosProfile) -> QosProfile:
-        """`profile` with every explicitly given policy replacing its own."""
-        changes: dict[str, Any] = {}
-        if self.reliability is not None:
-            changes["reliability"] = self.reliability
-        if self.durability is not None:
-            changes["durability"] = self.durability
-        if self.depth is not None:
-            changes["depth"] = self.depth
-        return replace(profile, **changes)
-
-
-def adapt_to_publishers(request: QosRequest, offered: list[QosProfile]) -> tuple[QosProfile, list[str]]:
-    """ros2cli's choice for echo/hz: reliable only when every publisher is, transient_local only when every
-    publisher is; explicitly requested policies win. Returns the profile and notes for the user."""
-    profile = request.base()
-    notes: list[str] = []
-    if offered:
-        reliable = sum(1 for q in offered if q.reliability == "reliable")
-        durable = sum(1 for q in offered if q.durability == "transient_local")
-        adapted = replace(
-            profile,
-            reliability="reliable" if reliable == len(offered) else "best_effort",
-            durability="transient_local" if durable == len(offered) else "volatile",
-        )
-        if 0 < reliable < len(offered) and request.reliability is None:
-            notes.append("some, but not all, publishers are offering reliable; subscribing best_effort")
-        if 0 < durable < len(offered) and request.durability is None:
-            notes.append("some, but not all, publishers are offering transient_local; subscribing volatile")
-        profile = adapted
-    return request.apply(profile), notes
 
 
 def to_dds_qos(profile: QosProfile, user_data: bytes | None = None) -> Any:

@@ -17,11 +17,11 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 from rostool.graph.ros2 import dds
-from rostool.graph.ros2.names import from_dds_topic, from_dds_type
+from rostool.graph.ros2_base.names import UNKNOWN_NODE as UNKNOWN_NODE
+from rostool.graph.ros2_base.names import from_dds_topic, from_dds_type
 
 DISCOVERY_TOPIC = "ros_discovery_info"
 DISCOVERY_TYPE = "rmw_dds_common/msg/ParticipantEntitiesInfo"
-UNKNOWN_NODE = "_NODE_NAME_UNKNOWN_"  # what ros2cli prints for endpoints no node claims
 EPROSIMA = b"\x01\x0f"  # the vendor id that starts a Fast DDS participant's GUID prefix
 ENDPOINTS_GRACE = 4.0  # seconds a participant may take to describe itself (Fast DDS: two heartbeats)
 

@@ -32,7 +32,6 @@ in the interface sources (see definitions.py).
 
 from __future__ import annotations
 
-import math
 import random
 import struct
 import threading
@@ -41,12 +40,13 @@ from collections.abc import Callable
 from typing import Any
 
 from rostool.errors import RostoolError
-from rostool.graph.ros2 import dds
-from rostool.graph.ros2.names import reply_topic, request_topic
 from rostool.graph.ros2.types import TypeSupport
+from rostool.graph.ros2_base.calls import ReplyWait, ServiceTimeout
+from rostool.graph.ros2_base.names import reply_topic, request_topic
+from rostool.graph.ros2_base.qos import PROFILES
 from rostool.interfaces.ros2_srv import register_service
 
-SERVICE_QOS = dds.PROFILES["services_default"]
+SERVICE_QOS = PROFILES["services_default"]
 REPLY_MATCH_WAIT = 2.0  # how long a server waits for its reply writer to match a new client's reader
 _ANY_SAMPLE = 0x7F
 
@@ -66,7 +66,6 @@ def _join(guid: int, seq: int, cdr: bytes) -> bytes:
 
 
 ECLIPSE_VENDOR = b"\x01\x10"  # GUID prefix of Cyclone DDS participants (rmw_cyclonedds_cpp, rostool)
-DEFAULT_REPLY_TIMEOUT = 30.0  # a call given no timeout (inf) still ends after this long without a reply
 _GONE_CHECK = 1.0  # a call without a deadline checks this often that its server is still matched
 
 
@@ -77,16 +76,13 @@ def remote_writer_known(session: Any, dds_topic: str) -> bool:
     return any(e.dds_topic == dds_topic and e.is_writer for e in cache.remote_endpoints())
 
 
-class ServiceTimeout(RostoolError):
-    """No reply within the call's timeout."""
-
-
-class ServiceClient:
+class ServiceClient(ReplyWait):
     """Calls one service. `wait_for_server` (which `call` does first) finds a server in discovery, picks
     its convention (see the module's docstring) and creates the DDS reader and writer, then waits until
     both have matched it."""
 
     def __init__(self, session: Any, service: str, srv_type: str) -> None:
+        super().__init__()
         self._session = session
         self._types: TypeSupport = session.types
         self.service = service
@@ -96,7 +92,6 @@ class ServiceClient:
         self.header: bool | None = None  # True: rmw_cyclonedds_cpp's in-payload header; None: no server yet
         self._guid = random.getrandbits(63) or 1
         self._seq = 0
-        self._lock = threading.Lock()
 
     def _server(self) -> bytes | None:
         """The participant GUID of a discovered server: one with a reader of our request topic and a writer
@@ -149,21 +144,6 @@ class ServiceClient:
                 return False
             time.sleep(0.02)
 
-    def call(self, request: object, timeout: float = 5.0, forever: bool = False) -> Any:
-        """The server's reply to `request`. `timeout` covers finding the server and the reply; an infinite
-        one is `DEFAULT_REPLY_TIMEOUT` unless `forever` (then the call ends only when the reply comes or
-        the server goes away)."""
-        if math.isinf(timeout) and not forever:
-            timeout = DEFAULT_REPLY_TIMEOUT
-        started = time.monotonic()
-        if not self.wait_for_server(min(timeout, DEFAULT_REPLY_TIMEOUT)):
-            raise RostoolError(
-                f"service {self.service} is not available: no server matched within "
-                f"{min(timeout, DEFAULT_REPLY_TIMEOUT):g} s (see `rostool service list`; --wait waits longer)"
-            )
-        with self._lock:
-            return self._exchange(request, started + timeout, timeout)
-
     def _exchange(self, request: object, deadline: float, timeout: float) -> Any:
         from cyclonedds._clayer import ddspy_take, ddspy_write  # type: ignore[import-not-found]
 
@@ -190,10 +170,7 @@ class ServiceClient:
             if time.monotonic() >= next_check:
                 next_check = time.monotonic() + _GONE_CHECK
                 if not self._matched():
-                    raise RostoolError(
-                        f"the server of {self.service} went away before it replied (see `rostool service "
-                        "list`); call again when it is back"
-                    )
+                    raise self._gone()
             time.sleep(0.005)
         raise ServiceTimeout(self._timeout_text(timeout))
 

@@ -319,7 +319,7 @@ def _fetch_from(session: Any, node: str, type_name: str, type_hash: str, timeout
 
 def _announced(session: Any, service: str, timeout: float) -> bool:
     """Does discovery show a server of `service`? Its request reader may come a moment after the writer."""
-    from rostool.graph.ros2.names import request_topic
+    from rostool.graph.ros2_base.names import request_topic
 
     wanted = request_topic(service)
     deadline = time.monotonic() + timeout

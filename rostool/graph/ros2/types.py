@@ -19,7 +19,7 @@ from typing import Any
 from rosbags.interfaces import Nodetype
 
 from rostool.errors import RostoolError
-from rostool.graph.ros2.names import type_to_dds
+from rostool.graph.ros2_base.names import type_to_dds
 from rostool.interfaces.ros2_types import Ros2Types
 from rostool.interfaces.typestores import DEFAULT_DISTRO
 

@@ -1,24 +1,72 @@
-"""ROS 2 `service call` and `service info`, built only on what a backend provides (`resolve`,
+"""ROS 2 `service call` and `service info`, built only on what a transport provides (`resolve`,
 `find_service_type`, `service_client`, `build_message`, `message_class`; the service's DDS endpoints): one
-algorithm and one set of lines for the DDS and the rclpy backends."""
+algorithm and one set of lines for the DDS and the rclpy backends. `ReplyWait` is the call of one
+service client both transports share: find the server, then exchange one request for its reply."""
 
 from __future__ import annotations
 
 import math
 import re
+import threading
 import time
 from collections.abc import Iterable
-from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from rostool.errors import RostoolError
+from rostool.graph.ros2_base.transport import ServiceEndpoint
+
+if TYPE_CHECKING:
+    from rostool.graph.base import ServiceInfo
+    from rostool.graph.ros2_base.transport import Ros2Host
 
 SRV_TYPE = re.compile(r"[A-Za-z]\w*/(srv/)?[A-Za-z]\w*\Z")
 CALL_WAIT_SECONDS = 5.0  # how long `call` gives a seen (or given) service's server to match without --wait
+DEFAULT_REPLY_TIMEOUT = 30.0  # a call given no timeout (inf) still ends after this long without a reply
+
+
+class ServiceTimeout(RostoolError):
+    """No reply within the call's timeout."""
+
+
+class ReplyWait:
+    """The call of one service client: `wait_for_server` (the transport's) first, then `_exchange` (the
+    transport's) one request for its reply, one call at a time."""
+
+    service: str
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+
+    def wait_for_server(self, timeout: float) -> bool:
+        raise NotImplementedError
+
+    def _exchange(self, request: object, deadline: float, timeout: float) -> Any:
+        raise NotImplementedError
+
+    def call(self, request: object, timeout: float = 5.0, forever: bool = False) -> Any:
+        """The server's reply to `request`. `timeout` covers finding the server and the reply; an infinite
+        one is `DEFAULT_REPLY_TIMEOUT` unless `forever` (then the call ends only when the reply comes or
+        the server goes away)."""
+        if math.isinf(timeout) and not forever:
+            timeout = DEFAULT_REPLY_TIMEOUT
+        started = time.monotonic()
+        if not self.wait_for_server(min(timeout, DEFAULT_REPLY_TIMEOUT)):
+            raise RostoolError(
+                f"service {self.service} is not available: no server matched within "
+                f"{min(timeout, DEFAULT_REPLY_TIMEOUT):g} s (see `rostool service list`; --wait waits longer)"
+            )
+        with self._lock:
+            return self._exchange(request, started + timeout, timeout)
+
+    def _gone(self) -> RostoolError:
+        return RostoolError(
+            f"the server of {self.service} went away before it replied (see `rostool service list`); "
+            "call again when it is back"
+        )
 
 
 def call_service(
-    graph: Any, name: str, values: tuple[str, ...], wait: bool = False, timeout: float | None = None
+    graph: Ros2Host, name: str, values: tuple[str, ...], wait: bool = False, timeout: float | None = None
 ) -> tuple[Any, Any]:
     """ros2 service call: find the type (an optional TYPE before the values, or the one announced), build
     the request, wait for the server, call. Returns (request, response)."""
@@ -49,7 +97,7 @@ def call_service(
     return request, client.call(request, timeout if timeout is not None else math.inf)
 
 
-def request_value(graph: Any, request_type: str, values: tuple[str, ...]) -> Any:
+def request_value(graph: Ros2Host, request_type: str, values: tuple[str, ...]) -> Any:
     """One YAML mapping, or the request fields in order (as `rosservice call` takes them)."""
     from rostool.interfaces.values import call_args
     from rostool.output.plain import field_names
@@ -69,20 +117,7 @@ def request_value(graph: Any, request_type: str, values: tuple[str, ...]) -> Any
     return dict(zip(fields, parsed, strict=True))
 
 
-@dataclass(frozen=True)
-class ServiceEndpoint:
-    """One DDS endpoint of a service as a backend sees it: a request or reply writer or reader."""
-
-    kind: str  # "request" or "reply"
-    node: str
-    is_writer: bool
-    service_type: str  # pkg/srv/Name
-    type_hash: str | None
-    gid: str
-    qos: dict[str, Any]
-
-
-def service_info_facts(resolved: str, endpoints: Iterable[ServiceEndpoint]) -> dict[str, Any] | None:
+def service_info_facts(resolved: str, endpoints: Iterable[ServiceEndpoint]) -> ServiceInfo | None:
     """ros2 service info's facts: the service's types, its clients and its servers (each with node, type
     hash, and the GIDs and QoS of its request and reply endpoints); None when nobody announces it."""
     # a client writes requests and reads replies, a server the other way round
@@ -97,7 +132,7 @@ def service_info_facts(resolved: str, endpoints: Iterable[ServiceEndpoint]) -> d
             types.add(endpoint.service_type)
     if not sides:
         return None
-    found: dict[str, Any] = {"name": resolved, "types": sorted(types), "clients": [], "servers": []}
+    found: ServiceInfo = {"name": resolved, "types": sorted(types), "clients": [], "servers": []}
     for role, node in sorted({(role, node) for role, node, _ in sides}):
         requests = sides.get((role, node, "request"), [])
         replies = sides.get((role, node, "reply"), [])

@@ -7,10 +7,13 @@ file layout of `ros2 param dump` and rcl: `/node: ros__parameters: {name: value}
 from __future__ import annotations
 
 import time
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from rostool.errors import RostoolError
 from rostool.interfaces.fill import build_message
+
+if TYPE_CHECKING:
+    from rostool.graph.ros2_base.transport import Ros2Host, ServiceClient
 
 NOT_SET, BOOL, INTEGER, DOUBLE, STRING = 0, 1, 2, 3, 4
 BYTE_ARRAY, BOOL_ARRAY, INTEGER_ARRAY, DOUBLE_ARRAY, STRING_ARRAY = 5, 6, 7, 8, 9
@@ -97,11 +100,11 @@ def describe_value(value: Any) -> str:
 class ParameterClient:
     """The parameter services of one node."""
 
-    def __init__(self, graph: Any, node: str, timeout: float = 5.0) -> None:
+    def __init__(self, graph: Ros2Host, node: str, timeout: float = 5.0) -> None:
         self.node = graph.resolve(node)
         self._graph = graph
         self._timeout = timeout
-        self._clients: dict[str, Any] = {}
+        self._clients: dict[str, ServiceClient] = {}
 
     def _call(self, verb: str, request: dict[str, Any]) -> Any:
         client = self._clients.get(verb)
@@ -120,20 +123,17 @@ class ParameterClient:
 
     def _check_node(self) -> None:
         """Fail at once, after discovery settles, when no participant serves any `<node>/...` service.
-        Service endpoints come with DDS discovery; the node names of ros_discovery_info may come later."""
-        from rostool.graph.ros2.names import request_topic
-
-        cache = self._graph.session.cache
-        prefix = request_topic(self.node + "/").removesuffix("Request")
+        Service endpoints come with discovery; the node names (ros_discovery_info) may come later."""
+        graph = self._graph
+        graph.before_node_check()
         deadline = time.monotonic() + NODE_SETTLE_SECONDS
         while True:
-            cache.poll()
-            if any(e.dds_topic.startswith(prefix) and not e.is_writer for e in cache.remote_endpoints()):
+            if graph.serves_under(self.node + "/"):
                 return
             if time.monotonic() >= deadline:
                 break
             time.sleep(0.05)
-        if any(node.full_name == self.node for node in cache.node_entries()):
+        if graph.announces_node(self.node):
             raise RostoolError(f"node {self.node} serves no parameter services (it was started without them)")
         raise RostoolError(
             f"unknown node {self.node}: no ROS 2 participant serves its parameter services "
@@ -301,3 +301,26 @@ def load_fields(
         except RostoolError as err:
             raise RostoolError(f"{source}: parameter {name}: {err}") from err
     return fields
+
+
+class NodeParameters(ParameterClient):
+    """The Graph protocol's `Parameters` of one ROS 2 node."""
+
+    def show(self, name: str) -> tuple[Any, str]:
+        value = self.get(name)
+        if int(value.type) == NOT_SET:
+            raise RostoolError(f"parameter {name} is not set on node {self.node}")
+        return to_python(value), describe_value(value)
+
+    def descriptor(self, name: str) -> dict[str, Any]:
+        d = self.describe(name)
+        return {"name": d.name, "type": TYPE_NAMES.get(int(d.type), str(d.type)),
+                "description": d.description, "additional_constraints": d.additional_constraints,
+                "read_only": bool(d.read_only)}  # fmt: skip
+
+    def dump(self) -> Any:
+        return dump_document(self)
+
+    def load(self, document: Any, use_wildcard: bool, source: str) -> list[tuple[str, bool, str]]:
+        parameters = file_parameters(document, self.node, use_wildcard, source)
+        return self.set_fields(load_fields(self, parameters, source))

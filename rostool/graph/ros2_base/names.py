@@ -13,6 +13,7 @@ from rostool.errors import RostoolError
 TOPIC_PREFIX = "rt"
 REQUEST_PREFIX = "rq"
 REPLY_PREFIX = "rr"
+UNKNOWN_NODE = "_NODE_NAME_UNKNOWN_"  # what ros2cli prints for endpoints no node claims
 
 
 def resolve(name: str, node: str = "/rostool") -> str:

@@ -1,0 +1,322 @@
+"""The Graph protocol on ROS 2, written once over a transport: `Ros2Base` assembles listings from the
+endpoints the transport describes, wraps its writers as publishers, and carries services, actions,
+parameters and bag sources on its service clients and subscriptions. The DDS backend (`graph/ros2/`) and
+the rclpy backend (`graph/rclpy/`) subclass it and provide only the methods under "transport"."""
+
+from __future__ import annotations
+
+import os
+import sys
+import threading
+from collections.abc import Callable, Iterable
+from typing import TYPE_CHECKING, Any, Literal
+
+from rostool.errors import RostoolError
+from rostool.graph.base import ActionInfo, NodeInfo, Received, Subscription, TopicEndpoint, TopicInfo
+from rostool.graph.ros2_base import actions
+from rostool.graph.ros2_base.calls import call_service, service_info_facts
+from rostool.graph.ros2_base.env import domain_id
+from rostool.graph.ros2_base.names import resolve
+from rostool.graph.ros2_base.params import NodeParameters
+from rostool.graph.ros2_base.publisher import Ros2Publisher
+from rostool.graph.ros2_base.qos import QosProfile, QosRequest
+from rostool.graph.ros2_base.recording import Ros2Source
+from rostool.interfaces.names import hidden_name
+
+if TYPE_CHECKING:
+    from rostool.graph.base import CancelingGoal, GoalOutcome, GoalWatcher, ServiceInfo
+    from rostool.graph.qos import QosRequest as UserQos
+    from rostool.graph.recording import Encoding
+    from rostool.graph.ros2_base.transport import EndpointView, ServiceClient, ServiceEndpoint, Writer
+    from rostool.interfaces.ros2_types import Ros2Types
+
+NodeEndpoints = tuple[set[tuple[str, str]], set[tuple[str, str]], set[tuple[str, str]], set[tuple[str, str]]]
+
+
+def ros1_only(what: str) -> RostoolError:
+    return RostoolError(
+        f"{what}: supported on ROS 1 graphs only in this rostool version; "
+        "use --ros1 (or set ROS_MASTER_URI) with a ROS 1 master"
+    )
+
+
+class Ros2Base:
+    """One ROS 2 graph. Read-only verbs wait for discovery as the transport does; subscribing and publishing
+    add endpoints to rostool's own node, `/<node_name>_<pid>`."""
+
+    ros_version = 2
+    style: Literal["ros1", "ros2"] = "ros2"
+    encoding: Encoding = "cdr"
+    types: Ros2Types
+
+    def __init__(self, node_name: str, anonymous: bool) -> None:
+        domain_id()  # a bad ROS_DOMAIN_ID fails in one line before anything starts
+        self.qos_request = QosRequest()
+        self.warn: Callable[[str], None] = lambda text: print(f"WARNING: {text}", file=sys.stderr)
+        base = node_name.strip("/")
+        self._node_name = f"{base}_{os.getpid()}" if anonymous else base
+        self._lock = threading.Lock()
+        self._subscriptions: list[Subscription] = []
+        self.require_peers = True  # False: an empty graph lists nothing instead of failing (the daemon)
+
+    # --- transport: what each backend provides ---------------------------------------------------
+    def _start(self) -> None:
+        """Join the graph now (not later, in a subscription's thread)."""
+        raise NotImplementedError
+
+    def _close_transport(self) -> None:
+        raise NotImplementedError
+
+    def _listing(self, nodes: bool = False) -> None:
+        """Wait for discovery as a listing needs it (with `nodes`: until participants named their nodes);
+        fail when nothing answers and peers are required."""
+        raise NotImplementedError
+
+    def _all_topic_views(self) -> Iterable[tuple[str, EndpointView]]:
+        """(topic, endpoint) of every topic's remote endpoints, writers of a topic before its readers."""
+        raise NotImplementedError
+
+    def topic_views(self, topic: str) -> list[EndpointView]:
+        """The remote endpoints of one topic, writers first, as the transport knows them now."""
+        raise NotImplementedError
+
+    def _await_topic(self, topic: str) -> None:
+        """Wait (a moment) for `topic` to have a publisher: `topic_type` asks then."""
+        raise NotImplementedError
+
+    def _node_endpoints(self, node: str) -> NodeEndpoints:
+        """(publications, subscriptions, served services, called services) of a node, as (name, type)."""
+        raise NotImplementedError
+
+    def _service_endpoint_views(self, service: str) -> Iterable[ServiceEndpoint]:
+        raise NotImplementedError
+
+    def _writer(self, topic: str, store_name: str, profile: QosProfile) -> Writer:
+        raise NotImplementedError
+
+    def _subscription(
+        self, topic: str, on_message: Callable[[Received], None], on_error: Callable[[str], None]
+    ) -> Subscription:
+        raise NotImplementedError
+
+    def store_name(self, type_name: str) -> str:
+        """`pkg/Type` or `pkg/msg/Type` -> `pkg/msg/Type`, known to rosbags' store."""
+        raise NotImplementedError
+
+    def node_names(self) -> list[str]:
+        raise NotImplementedError
+
+    def node_uri(self, name: str) -> str:
+        raise NotImplementedError
+
+    def service_endpoints(self, nodes: bool = False) -> list[tuple[str, str, list[str], list[str]]]:
+        """(name, type, server nodes, client nodes) of every service that has a server; with `nodes`,
+        once every participant has named its nodes."""
+        raise NotImplementedError
+
+    def service_client(self, service: str, srv_type: str) -> ServiceClient:
+        raise NotImplementedError
+
+    def published_topics(self) -> set[str]:
+        """The topics another process publishes now (`bag record`'s polls)."""
+        raise NotImplementedError
+
+    def before_node_check(self) -> None:
+        """Before a node's parameter services are looked for."""
+
+    def serves_under(self, prefix: str) -> bool:
+        """Whether another process serves a service named `prefix...` now."""
+        raise NotImplementedError
+
+    def announces_node(self, node: str) -> bool:
+        raise NotImplementedError
+
+    def wait_for_discovery(self) -> None:
+        raise NotImplementedError
+
+    def wait_for_newcomers(self, limit: float = 1.0) -> None:
+        raise NotImplementedError
+
+    def send_goal(
+        self, name: str, kind: str | None, goal: Any, timeout: float | None, watcher: GoalWatcher
+    ) -> GoalOutcome:
+        raise NotImplementedError
+
+    # --- the graph ---------------------------------------------------------------------------------
+    @property
+    def node_name(self) -> str:
+        return "/" + self._node_name
+
+    def __enter__(self) -> Ros2Base:
+        return self
+
+    def __exit__(self, *_exc: object) -> None:
+        self.close()
+
+    def close(self) -> None:
+        for sub in self._subscriptions:
+            sub.close()
+        self._subscriptions.clear()
+        self._close_transport()
+
+    def resolve(self, name: str) -> str:
+        return resolve(name)
+
+    def use_qos(self, qos: UserQos) -> None:
+        if qos.given:
+            self.qos_request = QosRequest(qos.profile, qos.reliability, qos.durability, qos.depth)
+
+    # --- nodes ---------------------------------------------------------------------------------------
+    def node_info(self, name: str) -> NodeInfo:
+        resolved = resolve(name)
+        uri = self.node_uri(resolved)
+        pubs, subs, servers, clients = self._node_endpoints(resolved)
+        info = NodeInfo(resolved, uri, None, sorted(pubs), sorted(subs), sorted({s for s, _ in servers}), [])
+        info.service_types = dict(sorted(servers))
+        info.service_clients = sorted(clients)
+        return info
+
+    def ping(self, name: str) -> float:
+        raise RostoolError("ROS 2 nodes cannot be pinged (there is no node API); try `rostool node info`")
+
+    def kill(self, name: str) -> None:
+        raise RostoolError("ROS 2 nodes cannot be killed remotely (there is no node API); stop the process")
+
+    # --- topics --------------------------------------------------------------------------------------
+    def topics(self) -> list[TopicInfo]:
+        self._listing()
+        found: dict[str, TopicInfo] = {}
+        for topic, view in self._all_topic_views():
+            info = found.setdefault(topic, TopicInfo(topic, view.type_name))
+            (info.publishers if view.is_writer else info.subscribers).append(view.node)
+        for info in found.values():
+            info.publishers.sort()
+            info.subscribers.sort()
+        return [found[name] for name in sorted(found)]
+
+    def topic_endpoints(self, name: str) -> list[TopicEndpoint]:
+        """Every remote reader and writer of a topic with its node, type, GID and QoS (topic info -v)."""
+        resolved = resolve(name)
+        self._listing(nodes=True)
+        rows: list[TopicEndpoint] = [
+            {
+                "node": view.node, "endpoint_type": "PUBLISHER" if view.is_writer else "SUBSCRIPTION",
+                "type": view.type_name, "type_hash": view.type_hash, "gid": view.gid,
+                "qos": {"reliability": view.qos.reliability, "durability": view.qos.durability,
+                        "depth": view.qos.depth},
+            }
+            for view in self.topic_views(resolved)
+        ]  # fmt: skip
+        return sorted(rows, key=lambda r: (r["endpoint_type"] != "PUBLISHER", r["node"]))
+
+    def topic_type(self, name: str) -> str | None:
+        resolved = resolve(name)
+        self._await_topic(resolved)
+        views = self.topic_views(resolved)
+        return views[0].type_name if views else None
+
+    def subscribe(
+        self,
+        topic: str,
+        on_message: Callable[[Received], None],
+        on_error: Callable[[str], None] | None = None,
+    ) -> Subscription:
+        self._start()
+        sub = self._subscription(resolve(topic), on_message, on_error or self.warn)
+        self._subscriptions.append(sub)
+        return sub
+
+    def publisher(self, topic: str, type_name: str, latch: bool = False) -> Ros2Publisher:
+        resolved = resolve(topic)
+        store_name = self.store_name(type_name)
+        existing = self.topic_type(resolved)
+        if existing and existing != store_name:
+            raise RostoolError(
+                f"topic {resolved} already has type {existing}; cannot publish {store_name} on it"
+            )
+        request = self.qos_request
+        base = request.base()
+        if latch and request.durability is None:
+            base = QosProfile(base.reliability, "transient_local", base.depth)
+        writer = self._writer(resolved, store_name, request.apply(base))
+        return Ros2Publisher(resolved, store_name, writer, self.types)
+
+    def message_class(self, type_name: str) -> type:
+        return self.types.store.types[self.store_name(type_name)]  # type: ignore[no-any-return]
+
+    def build_message(self, type_name: str, value: Any) -> Any:
+        from rostool.interfaces.fill import build_message
+
+        store_name = self.store_name(type_name)
+        return build_message(self.types.store, store_name, self.types.with_defaults(store_name, value))
+
+    # --- bag play and record -------------------------------------------------------------------------
+    def raw_publisher(self, topic: str, wire_type: Any, latch: bool = False) -> Ros2Publisher:
+        return self.publisher(topic, str(wire_type), latch)
+
+    def record_source(self, warn: Callable[[str], None], include_hidden: bool = False) -> Ros2Source:
+        return Ros2Source(self, warn, include_hidden)
+
+    # --- services ------------------------------------------------------------------------------------
+    def services(self) -> list[tuple[str, str | None, list[str]]]:
+        """(name, type, server nodes) of every service another node serves."""
+        return [(name, type_, servers) for name, type_, servers, _clients in self.service_endpoints()]
+
+    def find_service_type(self, service: str) -> str | None:
+        """The type a server of `service` announces (`pkg/srv/Name`), None when no server is seen."""
+        resolved = resolve(service)
+        return next((type_ for name, type_, _nodes in self.services() if name == resolved), None)
+
+    def service_type(self, name: str) -> str:
+        found = self.find_service_type(name)
+        if found is None:
+            raise RostoolError(f"unknown service {self.resolve(name)}: no server announces it")
+        return found
+
+    def find_services(self, type_name: str) -> list[str]:
+        """ros2 service find: the visible services of a type (`pkg/Name` or `pkg/srv/Name`)."""
+        pkg, _, name = type_name.strip().strip("/").rpartition("/")
+        wanted = f"{pkg.removesuffix('/srv')}/srv/{name}"
+        return [s for s, type_, _nodes in self.services() if type_ == wanted and not hidden_name(s)]
+
+    def service_info(self, service: str) -> ServiceInfo | None:
+        """ros2 service info's facts: the service's types, its clients and its servers (each with node, type
+        hash, the GIDs and QoS of its two DDS endpoints); None when no client or server announces it."""
+        resolved = resolve(service)
+        self._listing(nodes=True)
+        return service_info_facts(resolved, self._service_endpoint_views(resolved))
+
+    def service_call(
+        self, name: str, values: tuple[str, ...], wait: bool = False, timeout: float | None = None
+    ) -> tuple[Any, Any]:
+        return call_service(self, name, values, wait, timeout)
+
+    def service_uri(self, name: str) -> str:
+        raise ros1_only("service uri")
+
+    def service_nodes(self, name: str) -> list[str]:
+        raise ros1_only("service node (on ROS 2: service list -n)")
+
+    def service_args(self, name: str) -> str:
+        raise ros1_only("service args")
+
+    # --- actions -------------------------------------------------------------------------------------
+    def actions(self) -> list[actions.ActionSummary]:
+        return actions.list_actions(self)
+
+    def action_info(self, name: str, wait: float) -> ActionInfo:
+        """ros2 action info's facts: the action's type, servers and clients."""
+        action = self.resolve(name)
+        found = next((a for a in actions.list_actions(self, nodes=True) if a.name == action), None)
+        if found is None:
+            raise RostoolError(f"unknown action {action}: no server announces it (`rostool action list`)")
+        return {"name": found.name, "type": found.type, "servers": found.servers, "clients": found.clients}
+
+    def cancel_goals(self, name: str, goal_id: str | None) -> list[CancelingGoal]:
+        return actions.cancel_goals(self, name, goal_id)
+
+    # --- parameters ----------------------------------------------------------------------------------
+    def parameters(self, node: str | None, timeout: float = 5.0) -> NodeParameters:
+        if node is None:
+            raise RostoolError("ROS 2 parameters belong to nodes: give the NODE first")
+        return NodeParameters(self, node, timeout)

@@ -1,0 +1,51 @@
+"""`bag record`'s source on ROS 2: subscriptions that adapt to the publishers' QoS (or use --qos-*), over
+either transport; samples stay CDR bytes."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
+
+from rostool.graph.recording import Encoding, Put, subscribed_by
+from rostool.interfaces.names import hidden_name
+
+if TYPE_CHECKING:
+    from rostool.graph.base import Received
+    from rostool.graph.ros2_base.transport import Ros2Host
+
+
+class Ros2Source:
+    encoding: Encoding = "cdr"
+
+    def __init__(self, graph: Ros2Host, warn: Callable[[str], None], include_hidden: bool = False) -> None:
+        self.graph = graph
+        self.include_hidden = include_hidden
+        self.types = graph.types
+        self.store = graph.types.store
+        self.warn = warn
+        self.resolve = graph.resolve
+        graph.warn = warn  # the subscriptions' warnings (incompatible QoS) go to the same place
+
+    def published_topics(self) -> list[str]:
+        """Topics another node publishes; hidden ones (a name part starting with `_`) are left out unless
+        asked for, as `ros2 bag record -a` does."""
+        published = self.graph.published_topics()
+        return sorted(t for t in published if self.include_hidden or not hidden_name(t))
+
+    def subscribed_topics(self, node: str) -> list[str]:
+        return subscribed_by(self.graph, node)
+
+    def subscribe(self, topic: str, put: Put) -> None:
+        def on_message(received: Received) -> None:
+            put(topic, received.payload, received.type_name)
+
+        self.graph.subscribe(topic, on_message, lambda text: self.warn(f"{topic}: {text}"))
+
+    def describe(self, topic: str, origin: Any) -> dict[str, str]:
+        """The bag's view of the topic: its ROS 2 type and whether its publishers latch."""
+        writers = [e for e in self.graph.topic_views(topic) if e.is_writer]
+        latching = any(e.qos.durability == "transient_local" for e in writers)
+        return {"topic": topic, "type": str(origin), "callerid": "", "latching": "1" if latching else "0"}
+
+    def close(self) -> None:
+        self.graph.close()

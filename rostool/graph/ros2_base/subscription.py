@@ -1,0 +1,154 @@
+"""A ROS 2 subscription that drains in its own thread: it waits for the topic's publishers, subscribes with
+the QoS adapted to them (as ros2 topic echo does), and hands on CDR bytes as `Received`.
+
+When a publisher appears that the reader cannot match and the QoS was left to rostool, it subscribes again
+with the QoS adapted to every publisher now known; otherwise it warns, or fails when no publisher can serve
+it. How it reads (a DDS wait set, an rclpy raw subscription) is the transport's `_read_with`.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import replace
+from typing import TYPE_CHECKING, Any
+
+from rostool.errors import RostoolError
+from rostool.graph.base import Received
+from rostool.graph.ros2_base.qos import adapt_to_publishers, serves
+
+if TYPE_CHECKING:
+    from rostool.graph.ros2_base.qos import QosProfile
+    from rostool.graph.ros2_base.transport import EndpointView, Ros2Host
+
+READER_CACHE_DEPTH = 1000  # a deep local history lets a busy moment pass without losing samples
+SUBSCRIBERS_ONLY_WAIT = 0.5  # a topic with subscribers only: how long publishers are given to appear
+
+
+class DrainingSubscription:
+    thread_name = "ros2 sub"
+
+    def __init__(
+        self,
+        graph: Ros2Host,
+        topic: str,
+        on_message: Callable[[Received], None],
+        on_error: Callable[[str], None],
+    ) -> None:
+        self._graph = graph
+        self._topic = topic
+        self._on_message = on_message
+        self._on_error = on_error
+        self._closed = threading.Event()
+        self._since = self._discovery_started()
+        self._thread = threading.Thread(target=self._run, name=f"{self.thread_name} {topic}", daemon=True)
+        self._thread.start()
+
+    # --- the transport's -------------------------------------------------------------------------------
+    def _discovery_started(self) -> float:
+        """Since when (monotonic) discovery has been looking: a topic with subscribers only is given
+        SUBSCRIBERS_ONLY_WAIT from then for a publisher to show up."""
+        return time.monotonic()
+
+    def _known_type(self, type_name: str, writers: list[EndpointView]) -> str:
+        """The store name of the topic's type, made known to rosbags' store (from its publishers)."""
+        raise NotImplementedError
+
+    def _read_with(self, store_name: str, profile: QosProfile) -> QosProfile | None:
+        """Read until closed, or until a publisher this reader cannot match calls for another QoS
+        (returned)."""
+        raise NotImplementedError
+
+    def _wake(self) -> None:
+        """Make a reading `_read_with` notice that the subscription is closing."""
+
+    def _drop(self) -> None:
+        """Delete the transport's reader."""
+
+    # --- shared ----------------------------------------------------------------------------------------
+    def close(self) -> None:
+        self._closed.set()
+        self._wake()
+        if threading.current_thread() is not self._thread:
+            self._thread.join(2.0)
+        self._drop()
+
+    def _run(self) -> None:
+        try:
+            chosen = self._wait_for_type()
+            if chosen is None:
+                return
+            store_name, profile = chosen
+            next_profile: QosProfile | None = profile
+            while next_profile is not None and not self._closed.is_set():
+                next_profile = self._read_with(store_name, next_profile)
+        except RostoolError as err:
+            self._on_error(str(err))
+
+    def _endpoints(self) -> list[EndpointView]:
+        return self._graph.topic_views(self._topic)
+
+    def _wait_for_type(self) -> tuple[str, QosProfile] | None:
+        graph = self._graph
+        while not self._closed.is_set():
+            endpoints = self._endpoints()
+            writers = [e for e in endpoints if e.is_writer]
+            known = writers or endpoints
+            if known and (writers or time.monotonic() - self._since >= SUBSCRIBERS_ONLY_WAIT):
+                store_name = self._known_type(known[0].type_name, writers)
+                profile, notes = adapt_to_publishers(graph.qos_request, [w.qos for w in writers])
+                for note in notes:
+                    graph.warn(note)
+                return store_name, profile
+            self._closed.wait(0.05)
+        return None
+
+    def _cache_profile(self, profile: QosProfile) -> QosProfile:
+        """A reader's depth is local (it never affects matching): a deep cache lets a busy moment pass
+        without losing samples a reliable publisher already delivered."""
+        if self._graph.qos_request.depth is None and profile.depth:
+            return replace(profile, depth=max(profile.depth, READER_CACHE_DEPTH))
+        return profile
+
+    def _receiver(self, store_name: str) -> Callable[[bytes], None]:
+        """Hands each message's bytes on as `Received`, decoded on demand."""
+        store, topic, deliver, clock = self._graph.types.store, self._topic, self._on_message, time.time_ns
+
+        def decode(payload: bytes) -> Any:
+            return store.deserialize_cdr(payload, store_name)
+
+        def receive(payload: bytes) -> None:
+            deliver(Received(topic, payload, clock(), store_name, decode))
+
+        return receive
+
+    def _offered(self) -> list[QosProfile]:
+        return [w.qos for w in self._endpoints() if w.is_writer]
+
+    def _readapted(self, profile: QosProfile) -> QosProfile | None:
+        """The QoS that serves every publisher now known, when it differs from `profile`."""
+        offered = self._offered()
+        if not offered:
+            return None
+        adapted, notes = adapt_to_publishers(self._graph.qos_request, offered)
+        if adapted.reliability == profile.reliability and adapted.durability == profile.durability:
+            return None  # the user's own --qos-* choice, or nothing better to do
+        for note in notes:
+            self._graph.warn(note)
+        return adapted
+
+    def _report_incompatible(self, policy: str, profile: QosProfile) -> None:
+        """Fatal when no known publisher can serve this reader; otherwise a warning, as ros2 topic echo
+        gives, and the compatible publishers keep being read."""
+        offered = self._offered()
+        described = sorted({qos.describe() for qos in offered})
+        offers = f"; publishers offer {'; '.join(described)}" if described else ""
+        text = (
+            f"a publisher of {self._topic} offers QoS incompatible with this subscription "
+            f"({profile.describe()}): incompatible policy {policy}{offers}"
+        )
+        if offered and not any(serves(qos, profile) for qos in offered):
+            self._on_error(f"{text} (adjust --qos-reliability / --qos-durability)")
+        else:
+            self._graph.warn(f"{text}; no messages will be received from it")

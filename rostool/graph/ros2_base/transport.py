@@ -1,0 +1,103 @@
+"""What a ROS 2 transport gives the shared graph: endpoints as it sees them, writers that take CDR bytes,
+service clients. The DDS backend (rostool's own participant) and the rclpy backend (the user's RMW) each
+provide these; everything built on them is written once in this package."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, Protocol
+
+if TYPE_CHECKING:
+    from rostool.graph.base import Received, Subscription, TopicInfo
+    from rostool.graph.ros2_base.qos import QosProfile, QosRequest
+    from rostool.interfaces.ros2_types import Ros2Types
+
+
+@dataclass(frozen=True)
+class EndpointView:
+    """One reader or writer of a ROS 2 topic in another process, as the transport describes it."""
+
+    node: str  # its node's full name (UNKNOWN_NODE when no node claims it)
+    is_writer: bool
+    type_name: str  # pkg/msg/Name
+    type_hash: str | None  # RIHS01_... as announced ("" or None when not)
+    gid: str  # dotted hex
+    qos: QosProfile
+
+
+@dataclass(frozen=True)
+class ServiceEndpoint:
+    """One DDS endpoint of a service as a transport sees it: a request or reply writer or reader."""
+
+    kind: str  # "request" or "reply"
+    node: str
+    is_writer: bool
+    service_type: str  # pkg/srv/Name
+    type_hash: str | None
+    gid: str
+    qos: dict[str, Any]
+
+
+class Writer(Protocol):
+    """A transport's writer of one topic: CDR bytes (with their encapsulation header) out as they are."""
+
+    def write(self, payload: bytes) -> None: ...
+
+    def matched(self) -> int: ...
+
+
+class ServiceClient(Protocol):
+    """A transport's client of one service: requests and replies are rosbags messages."""
+
+    service: str
+    request_type: str
+
+    def wait_for_server(self, timeout: float) -> bool: ...
+
+    def call(self, request: object, timeout: float = 5.0, forever: bool = False) -> Any: ...
+
+    def close(self) -> None: ...
+
+
+class Ros2Host(Protocol):
+    """What the shared pieces (subscriptions, recording, parameters, calls, actions) ask of a ROS 2 graph."""
+
+    types: Ros2Types
+    qos_request: QosRequest
+    warn: Callable[[str], None]
+
+    def resolve(self, name: str) -> str: ...
+
+    def close(self) -> None: ...
+
+    def topics(self) -> list[TopicInfo]: ...
+
+    def services(self) -> list[tuple[str, str | None, list[str]]]: ...
+
+    def service_endpoints(self, nodes: bool = False) -> list[tuple[str, str, list[str], list[str]]]: ...
+
+    def find_service_type(self, service: str) -> str | None: ...
+
+    def service_client(self, service: str, srv_type: str) -> ServiceClient: ...
+
+    def message_class(self, type_name: str) -> type: ...
+
+    def build_message(self, type_name: str, value: Any) -> Any: ...
+
+    def subscribe(
+        self,
+        topic: str,
+        on_message: Callable[[Received], None],
+        on_error: Callable[[str], None] | None = None,
+    ) -> Subscription: ...
+
+    def topic_views(self, topic: str) -> list[EndpointView]: ...
+
+    def published_topics(self) -> set[str]: ...
+
+    def before_node_check(self) -> None: ...
+
+    def serves_under(self, prefix: str) -> bool: ...
+
+    def announces_node(self, node: str) -> bool: ...
