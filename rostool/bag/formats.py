@@ -63,6 +63,7 @@ FILE_SUFFIXES = tuple(fmt.suffix for fmt in FILES)  # how the name of a bag file
 STORAGES = (FORMATS["mcap"], FORMATS["db3"])  # what a rosbag2 directory's files may be
 ROS1_PREFIX = b"#ROSBAG V"  # any version: a version other than 2.0 is named in its error
 ZSTD_MAGIC = b"\x28\xb5\x2f\xfd"  # a file-compressed rosbag2 storage file
+HEAD_SIZE = 16  # bytes that tell every format apart
 
 
 def by_suffix(suffix: str) -> BagFormat | None:
@@ -86,7 +87,11 @@ def by_storage(storage: str) -> BagFormat:
 def sniff(path: Path) -> BagKind | None:
     """The format of one file from its first bytes; None when it is not a bag file."""
     with path.open("rb") as handle:
-        head = handle.read(16)
+        return kind_of(handle.read(HEAD_SIZE))
+
+
+def kind_of(head: bytes) -> BagKind | None:
+    """The format whose files start with `head` (a ROS 1 bag of any version); None for no bag file."""
     if head.startswith(ROS1_PREFIX):
         return "bag"
     return next((fmt.kind for fmt in STORAGES if head.startswith(fmt.magic)), None)

@@ -11,7 +11,16 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from rostool.bag.failures import warn
-from rostool.bag.formats import FORMATS, ROS1_PREFIX, ZSTD_MAGIC, by_storage, sniff, storage_kind
+from rostool.bag.formats import (
+    FORMATS,
+    HEAD_SIZE,
+    ROS1_PREFIX,
+    ZSTD_MAGIC,
+    by_storage,
+    kind_of,
+    sniff,
+    storage_kind,
+)
 from rostool.bag.model import BagInput, BagKind
 from rostool.bag.rosbag2_metadata import MetadataError, check_metadata, load_metadata
 from rostool.errors import RostoolError
@@ -38,13 +47,13 @@ def detect(given: str | Path) -> BagInput:
         size = path.stat().st_size
         if size == 0:
             raise RostoolError(f"{path}: empty file (0 bytes), not a bag")
-        kind = sniff(path)
         with path.open("rb") as handle:
-            head = handle.read(16)
+            head = handle.read(HEAD_SIZE)
     except PermissionError as err:
         raise RostoolError(f"{path}: permission denied") from err
     except OSError as err:
         raise RostoolError(f"{path}: cannot read: {err.strerror or err}") from err
+    kind = kind_of(head)
     if kind == "bag":
         if not head.startswith(FORMATS["bag"].magic):
             version = head[len(ROS1_PREFIX) :].split(b"\n")[0].decode(errors="replace")

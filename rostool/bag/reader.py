@@ -106,7 +106,7 @@ class BagReader(AbstractContextManager["BagReader"]):
         if bag.kind == "rosbag2":
             self._open_directory(bag, fmt.reader(bag.path))
         elif fmt.ros_version == 1:
-            self._add_part(bag.path, fmt.reader(bag.path), bag)
+            self._add_part(bag.path, fmt.reader(bag.path))
         else:
             self._open_storages(fmt, bag.files)
 
@@ -144,23 +144,20 @@ class BagReader(AbstractContextManager["BagReader"]):
             reader.open()
         self._stack.callback(reader.close)
 
-    def _add_part(self, path: Path, reader: Any, bag: BagInput) -> None:
-        with guard(path):
-            reader.open()
-        self._stack.callback(reader.close)
-        conns = list(reader.connections)
-        self._register(path, conns, counts=True)
-        part = _Part(path, reader, _ros1_messages(reader), conns)
-        part.to_ours = {id(c): self._ours(c) for c in conns}
-        part.start_ns, part.end_ns = reader.start_time, reader.end_time
-        self._parts.append(part)
+    def _add_part(self, path: Path, reader: Any) -> None:
+        """A ROS 1 bag: its own reader, read through `_ros1_fast`."""
+        self._enter(path, reader)
+        self._add(path, reader, _ros1_messages(reader), True, reader.start_time, reader.end_time)
 
     def _add_storage(self, path: Path, storage: Any, compressed: bool, counts: bool) -> None:
-        conns = list(storage.connections)
+        messages = _storage_messages(storage, compressed)
+        self._add(path, storage, messages, counts, storage.metadata.start_time, storage.metadata.end_time)
+
+    def _add(self, path: Path, reader: Any, messages: Any, counts: bool, start_ns: int, end_ns: int) -> None:
+        conns = list(reader.connections)
         self._register(path, conns, counts)
-        part = _Part(path, storage, _storage_messages(storage, compressed), conns)
+        part = _Part(path, reader, messages, conns, start_ns=start_ns, end_ns=end_ns)
         part.to_ours = {id(c): self._ours(c) for c in conns}
-        part.start_ns, part.end_ns = storage.metadata.start_time, storage.metadata.end_time
         self._parts.append(part)
 
     def _key(self, conn: Connection) -> tuple[object, ...]:

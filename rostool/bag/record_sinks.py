@@ -53,7 +53,7 @@ class Ros1Sink:
     def __init__(self, final: Path, compression: str, force: bool, source: RecordSource) -> None:
         self.final = final
         self.active = active_name(final)
-        if force:  # _check_target made sure it is a bag
+        if force:  # check_target made sure it is a bag
             remove_bag(self.active)
         try:
             self.writer = BagWriter(self.active, compression)
@@ -135,7 +135,7 @@ class Ros2Sink:
         self.fmt = fmt
         self.source = source
         self._stores = CrossVersionStores(2)
-        if force:  # _check_target made sure it is a bag
+        if force:  # check_target made sure it is a bag
             remove_bag(self.active)
         plugin = StoragePlugin[fmt.storage.upper()]
         try:

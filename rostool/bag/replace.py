@@ -15,16 +15,12 @@ import shutil
 from collections.abc import Iterable
 from pathlib import Path
 
+from rostool.bag.formats import FILE_SUFFIXES, FILES, ZSTD_MAGIC
 from rostool.errors import RostoolError
 
-_MAGICS = (
-    b"#ROSBAG V2.0\n",  # ROS 1 bag
-    b"\x89MCAP0\r\n",  # mcap
-    b"SQLite format 3\x00",  # rosbag2 .db3
-    b"\x28\xb5\x2f\xfd",  # zstd: a file-compressed rosbag2 storage file (NAME_0.mcap.zstd)
-)
+_MAGICS = (*(fmt.magic for fmt in FILES), ZSTD_MAGIC)  # zstd: NAME_0.mcap.zstd, a file-compressed storage
 _DIR_FILES = {"metadata.yaml", "metadata.yaml.tmp"}
-_SUFFIXES = (".bag", ".mcap", ".db3", ".active", ".zstd")
+_SUFFIXES = (*FILE_SUFFIXES, ".active", ".zstd")  # .active: what a recorder is writing
 
 
 def is_bag_file(path: Path) -> bool:
