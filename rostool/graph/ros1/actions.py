@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from rostool.errors import RostoolError
-from rostool.graph.base import ActionSummary
+from rostool.graph.base import ActionSummary, GoalEvent, GoalOutcome
 from rostool.graph.ros1.names import resolve
 from rostool.interfaces.action import (
     SUCCEEDED,
@@ -41,29 +41,18 @@ WAIT_NOTICE = 2.0  # say that we are waiting for the server after this long
 _goal_numbers = itertools.count(1)
 
 
-class _Status:
-    """A goal status code (actionlib_msgs/GoalStatus) and its name."""
-
-    status: int
-
-    @property
-    def status_name(self) -> str:
-        return status_name(self.status)
-
-
 @dataclass(frozen=True)
-class GoalState(_Status):
+class GoalState:
+    """A goal as the server's status topic lists it, with actionlib's name of its status."""
+
     id: str
-    status: int
+    status: str
     text: str
 
 
-@dataclass
-class GoalEvent(_Status):
-    kind: str  # "feedback", "status" or "result"
-    status: int
-    text: str = ""
-    message: Any = None  # the feedback or result message
+def _event(kind: str, status: int, text: str = "", message: Any = None) -> GoalEvent:
+    """A goal's feedback, status change or result, its status named as actionlib names it."""
+    return GoalEvent(kind, status, status_name(status), message, text)
 
 
 class GoalTimeout(RostoolError):
@@ -120,7 +109,7 @@ def goal_states(graph: Ros1Core, name: str, wait: float = 2.0) -> list[GoalState
     except queue.Empty:
         return None
     message = status_type.deserialize(payload)
-    return [GoalState(s.goal_id.id, int(s.status), s.text) for s in message.status_list]
+    return [GoalState(s.goal_id.id, status_name(int(s.status)), s.text) for s in message.status_list]
 
 
 def resolve_action_type(graph: Ros1Core, catalog: Interfaces, name: str, type_name: str | None) -> ActionType:
@@ -234,17 +223,17 @@ class ActionClient:
                 with self._lock:
                     changed, self._last_status = code != self._last_status, code
                 if changed:
-                    self._events.put(GoalEvent("status", code, status.text))
+                    self._events.put(_event("status", code, status.text))
 
     def _on_feedback(self, message: Any) -> None:
         if self.goal_id and message.status.goal_id.id == self.goal_id:
-            self._events.put(GoalEvent("feedback", int(message.status.status), message.status.text,
-                                       message.feedback))  # fmt: skip
+            self._events.put(_event("feedback", int(message.status.status), message.status.text,
+                                    message.feedback))  # fmt: skip
 
     def _on_result(self, message: Any) -> None:
         if self.goal_id and message.status.goal_id.id == self.goal_id:
             self._events.put(
-                GoalEvent("result", int(message.status.status), message.status.text, message.result)
+                _event("result", int(message.status.status), message.status.text, message.result)
             )
 
     # --- goals ----------------------------------------------------------------------------------
@@ -312,19 +301,6 @@ def _connected(subscription: Subscription) -> bool:
     return not links or any(link.connected for link in links)
 
 
-@dataclass
-class GoalOutcome:
-    goal_id: str
-    status: int | None
-    text: str = ""
-    result: Any = None
-    canceled: bool = False
-
-    @property
-    def succeeded(self) -> bool:
-        return self.status == SUCCEEDED
-
-
 def send_goal(
     graph: Ros1Core,
     catalog: Interfaces,
@@ -351,12 +327,13 @@ def send_goal(
             if on_event is not None and event.kind != "status":
                 on_event(event)
             if event.kind == "result":
-                return GoalOutcome(goal_id, event.status, event.text, event.message)
+                return GoalOutcome(goal_id, event.status, event.message, event.text,
+                                   succeeded=event.status == SUCCEEDED)  # fmt: skip
     except (KeyboardInterrupt, GoalTimeout) as stop:
         client.cancel()
         final = client.outcome_after_cancel()
         if final is not None and on_event is not None:
-            on_event(GoalEvent("result", final.status, final.text, final.message))
+            on_event(_event("result", final.status, final.text, final.message))
         if isinstance(stop, GoalTimeout):
             status = f"; the server reports {final.status_name}" if final is not None else ""
             raise GoalTimeout(

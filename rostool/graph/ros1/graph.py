@@ -4,10 +4,12 @@ actions (actions.py), the parameter server (parameters.py) and bag play and reco
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import asdict
 from functools import partial
 from typing import TYPE_CHECKING, Any, Literal
 
 from rostool.errors import RostoolError
+from rostool.graph.base import ActionInfo
 from rostool.graph.recording import Encoding, Put, RecordSource, subscribed_by
 from rostool.graph.ros1 import actions, services
 from rostool.graph.ros1.core import Ros1Core
@@ -16,7 +18,7 @@ from rostool.interfaces.msgspec import InterfaceError
 from rostool.interfaces.srv import load_service
 
 if TYPE_CHECKING:
-    from rostool.graph.base import ActionSummary, GoalWatcher
+    from rostool.graph.base import ActionSummary, CancelingGoal, GoalOutcome, GoalWatcher, TopicEndpoint
     from rostool.graph.qos import QosRequest
     from rostool.graph.ros1.topics import Publisher
     from rostool.interfaces.ros1 import Ros1Type
@@ -33,7 +35,7 @@ class Ros1Graph(Ros1Core):
         if qos.given:
             raise RostoolError("--qos-* options apply to ROS 2 graphs only: ROS 1 topics have no QoS")
 
-    def topic_endpoints(self, name: str) -> list[dict[str, Any]]:
+    def topic_endpoints(self, name: str) -> list[TopicEndpoint]:
         raise RostoolError("topic endpoints with GIDs and QoS exist on ROS 2 graphs only")
 
     # --- bag play and record ------------------------------------------------------------------
@@ -99,22 +101,24 @@ class Ros1Graph(Ros1Core):
     def actions(self) -> list[ActionSummary]:
         return actions.list_actions(self)
 
-    def action_info(self, name: str, wait: float) -> dict[str, Any]:
+    def action_info(self, name: str, wait: float) -> ActionInfo:
         """The action's summary and the goals its server reports (None: no status within `wait`)."""
         summary = actions.action_summary(self, name)
         goals = actions.goal_states(self, summary.name, wait)
-        return {**vars(summary), "goals": None if goals is None else
-                [{"id": g.id, "status": g.status_name, "text": g.text} for g in goals]}  # fmt: skip
+        return ActionInfo(
+            name=summary.name, type=summary.type, servers=summary.servers, clients=summary.clients,
+            goals=None if goals is None else [asdict(goal) for goal in goals],
+        )  # fmt: skip
 
     def send_goal(
         self, name: str, kind: str | None, goal: Any, timeout: float | None, watcher: GoalWatcher
-    ) -> actions.GoalOutcome:
+    ) -> GoalOutcome:
         return actions.send_goal(
             self, self.catalog(), name, kind, goal, timeout,
             on_event=watcher.event, on_sent=watcher.sent, on_waiting=watcher.waiting,
         )  # fmt: skip
 
-    def cancel_goals(self, name: str, goal_id: str | None) -> list[Any]:
+    def cancel_goals(self, name: str, goal_id: str | None) -> list[CancelingGoal]:
         """Publish the cancel; actionlib servers do not answer which goals it reached."""
         actions.cancel_goals(self, name, goal_id or "")
         return []
