@@ -10,7 +10,7 @@ import click
 
 from rostool.bag.export import ExportOptions, ExportResult
 from rostool.bag.many import BagItem
-from rostool.commands.bag import CONTEXT, _topic_list, distro_option, jobs_option
+from rostool.commands.bag._options import CONTEXT, distro_option, jobs_option, topic_list, topics_option
 from rostool.errors import RostoolError
 
 
@@ -23,9 +23,7 @@ from rostool.errors import RostoolError
 @click.option(
     "-o", "--output", type=click.Path(file_okay=False), metavar="DIR", help="Write the tables here."
 )
-@click.option(
-    "--topics", multiple=True, metavar="T", help="Only these topics (repeatable, or comma-separated)."
-)
+@topics_option
 @click.option("--images", type=click.Path(file_okay=False), metavar="DIR",
               help="Write sensor_msgs Image/CompressedImage messages as PNG files here.")  # fmt: skip
 @click.option("--video", is_flag=True, help="With --images: one MP4 (H.264) per image topic instead of PNGs.")
@@ -76,6 +74,7 @@ def export(
       duckdb -c "SELECT bag, count(*) FROM read_parquet('dataset/odom/*/*.parquet',
                  hive_partitioning=true) GROUP BY bag"
     """
+    from rostool.bag.copy_many import make_output_folder
     from rostool.bag.export import require_extras
     from rostool.bag.many import expand, successes
 
@@ -89,7 +88,7 @@ def export(
     options = ExportOptions(
         fmt=fmt if output is not None else None,  # type: ignore[arg-type]
         out=Path(output) if output is not None and remote_out is None else None,
-        topics=_topic_list(topics),
+        topics=topic_list(topics),
         images=Path(images) if images is not None else None,
         video=video,
         distro=distro,
@@ -100,7 +99,7 @@ def export(
         options.out = Path("-")  # each bag is written into a local folder of its own, then uploaded
     for where in (options.out if remote_out is None else None, options.images):
         if where is not None:
-            _make_folder(where)
+            make_output_folder(where)
     several = len(items) > 1
     total = ExportResult("")
     exported = 0
@@ -151,10 +150,3 @@ def _export_one(options: ExportOptions, several: bool, remote_out: Any, item: Ba
         )
         result.files = upload(Path(stage), remote_out)
     return result
-
-
-def _make_folder(path: Path) -> None:
-    try:
-        path.mkdir(parents=True, exist_ok=True)
-    except OSError as err:
-        raise RostoolError(f"{path}: cannot create the output folder: {err.strerror or err}") from err

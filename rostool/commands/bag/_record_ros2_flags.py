@@ -1,0 +1,132 @@
+"""ros2 bag record's flags as parsed (`RecordFlags`), and its validate_parsed_arguments, message for
+message."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import click
+
+from rostool.commands.bag._options import topic_list
+from rostool.errors import RostoolError
+from rostool.graph.qos import QosRequest
+
+UNSUPPORTED = (
+    "start_paused", "snapshot_mode", "ignore_leaf_topics", "static_topics_path", "storage_preset_profile",
+    "storage_config_file",
+)  # fmt: skip
+
+
+@dataclass(frozen=True)
+class RecordFlags:
+    positional_topics: tuple[str, ...]
+    output: str | None
+    storage: str
+    topics: tuple[str, ...]
+    services: tuple[str, ...]
+    topic_types: tuple[str, ...]
+    all_: bool
+    all_topics: bool
+    all_services: bool
+    regex: str
+    exclude_regex: str
+    exclude_topics: tuple[str, ...]
+    exclude_topic_types: tuple[str, ...]
+    exclude_services: tuple[str, ...]
+    include_hidden_topics: bool
+    include_unpublished_topics: bool
+    no_discovery: bool
+    polling_interval: int
+    qos_profile_overrides_path: str | None
+    serialization_format: str
+    max_bag_size: int
+    max_bag_duration: int
+    max_bag_files: int
+    max_cache_size: int
+    compression_mode: str
+    compression_format: str
+    use_sim_time: bool
+    node_name: str
+    custom_data: tuple[str, ...]
+    disable_keyboard_controls: bool
+    log_level: str
+    duration: float | None
+    quiet: bool
+    output_name: str | None
+    force: bool
+    compression_queue_size: int
+    compression_threads: int
+    compression_threads_priority: int
+    max_cache_duration: int
+    start_paused: bool
+    snapshot_mode: bool
+    ignore_leaf_topics: bool
+    static_topics_path: str | None
+    storage_preset_profile: str | None
+    storage_config_file: str | None
+    interface_paths: tuple[str, ...]
+    qos: QosRequest
+
+    @property
+    def topic_names(self) -> list[str]:
+        return topic_list([*self.positional_topics, *self.topics])
+
+    @property
+    def recording_all_topics(self) -> bool:
+        return self.all_ or self.all_topics
+
+    @property
+    def recording_all_services(self) -> bool:
+        return self.all_ or self.all_services
+
+
+def check_flags(flags: RecordFlags) -> None:
+    """Refuse what rostool cannot do and what ros2 bag refuses; warn where ros2 bag warns."""
+    for name in UNSUPPORTED:
+        if getattr(flags, name):
+            flag = "--" + name.replace("_", "-")
+            raise RostoolError(f"{flag} is not supported by rostool's recorder yet; leave it out")
+    topics, services, topic_types = (
+        flags.topic_names,
+        topic_list(flags.services),
+        topic_list(flags.topic_types),
+    )
+    all_topics, all_services, regex = flags.recording_all_topics, flags.recording_all_services, flags.regex
+    if not (all_topics or all_services or topics or services or topic_types or regex):
+        raise RostoolError(
+            "Need to specify at least one option out of --all, --all-topics, --all-services, --services, "
+            "--topics, --topic-types or --regex"
+        )
+    if flags.exclude_regex and not (all_topics or all_services or topic_types or regex):
+        raise RostoolError(
+            "--exclude-regex argument requires either --all, --all-topics, --topic-types, "
+            "--all-services or --regex"
+        )
+    if flags.exclude_topics and not (all_topics or topic_types or regex):
+        raise RostoolError(
+            "--exclude-topics argument requires either --all, --all-topics, --topic-types or --regex"
+        )
+    if flags.exclude_topic_types and not (all_topics or topic_types or regex):
+        raise RostoolError("--exclude-topic-types argument requires either --all, --all-topics or --regex")
+    if flags.exclude_services and not (all_services or regex):
+        raise RostoolError("--exclude-services argument requires either --all, --all-services or --regex")
+    if flags.use_sim_time and flags.no_discovery:
+        raise RostoolError(
+            "--use-sim-time and --no-discovery both set, but are incompatible settings: "
+            "the /clock topic needs to be discovered to record with sim time"
+        )
+    if flags.compression_format and flags.compression_mode == "none":
+        raise RostoolError("Invalid choice: Cannot specify compression format without a compression mode.")
+    if flags.max_bag_files and not (flags.max_bag_size or flags.max_bag_duration):
+        raise RostoolError("--max-bag-files needs --max-bag-size or --max-bag-duration")
+    warn = [
+        (all_services and services, "--all or --all-services will override --services"),
+        (all_topics and topics, "--all or --all-topics will override --topics"),
+        (
+            (all_topics or all_services) and regex,
+            "--all, --all-topics or --all-services will override --regex",
+        ),
+    ]
+    for given, text in warn:
+        if given:
+            click.echo(f"[WARN] [ros2bag]: {text}", err=True)

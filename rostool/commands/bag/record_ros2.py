@@ -1,0 +1,196 @@
+"""`rostool bag record` with ros2 bag record's flags (under ROS 2: --ros2, ROS_VERSION=2 or a detected ROS 2
+graph). The letters mean what they mean to `ros2 bag` (Jazzy/Kilted): `-o NAME` is the exact rosbag2
+directory, `-s` the storage (mcap, sqlite3), `-b`/`-d` split by size/duration, `--topics a b`."""
+
+from __future__ import annotations
+
+import datetime
+from pathlib import Path
+
+import click
+
+from rostool.commands._common import interfaces_option
+from rostool.commands._qos import qos_options
+from rostool.commands.bag._flags import ListCommand, parsed_into
+from rostool.commands.bag._options import CONTEXT, topic_list
+from rostool.commands.bag._record_ros2_flags import RecordFlags, check_flags
+from rostool.errors import RostoolError
+
+RECORD_LISTS = (
+    "--topics", "--services", "--topic-types", "--exclude-topics", "--exclude-topic-types",
+    "--exclude-services", "--custom-data",
+)  # fmt: skip
+
+
+@click.command(
+    cls=ListCommand,
+    list_options=RECORD_LISTS,
+    context_settings=CONTEXT,
+    short_help="Record ROS 2 data to a bag.",
+)
+@click.argument("positional_topics", nargs=-1, metavar="[TOPIC]...")
+@click.option("-o", "--output", metavar="DIR",
+              help="The bag to create: a rosbag2 directory of exactly this name (default: "
+                   "rosbag2_YYYY_MM_DD-HH_MM_SS); a name ending in .mcap/.db3 writes one file.")  # fmt: skip
+@click.option("-s", "--storage", type=click.Choice(["mcap", "sqlite3"]), default="mcap", show_default=True,
+              help="Storage of the rosbag2 directory.")  # fmt: skip
+@click.option("--topics", "topics", multiple=True, metavar="TOPIC...", help="Topics to record.")
+@click.option("--services", multiple=True, metavar="SERVICE...",
+              help="Services to record (their /_service_event topics; needs introspection).")  # fmt: skip
+@click.option("--topic-types", multiple=True, metavar="TYPE...", help="Record the topics of these types.")
+@click.option(
+    "-a", "--all", "all_", is_flag=True, help="Record all topics and services (hidden ones left out)."
+)
+@click.option("--all-topics", is_flag=True, help="Record all topics (hidden ones left out).")
+@click.option("--all-services", is_flag=True, help="Record all services via their service event topics.")
+@click.option(
+    "-e", "--regex", default="", metavar="RE", help="Record topics and services whose name contains RE."
+)
+@click.option("-x", "--exclude-regex", default="", metavar="RE", help="Leave out names containing RE.")
+@click.option("--exclude-topics", multiple=True, metavar="TOPIC...", help="Leave out these topics.")
+@click.option(
+    "--exclude-topic-types", multiple=True, metavar="TYPE...", help="Leave out topics of these types."
+)
+@click.option("--exclude-services", multiple=True, metavar="SERVICE...", help="Leave out these services.")
+@click.option(
+    "--include-hidden-topics", is_flag=True, help="Discover and record hidden topics (/_name) as well."
+)
+@click.option(
+    "--include-unpublished-topics", is_flag=True, help="Also subscribe to --topics nobody publishes yet."
+)
+@click.option("--no-discovery", is_flag=True, help="Record only topics present at startup.")
+@click.option("-p", "--polling-interval", type=click.IntRange(min=1), default=100, show_default=True,
+              metavar="MS", help="Milliseconds between looking for new topics.")  # fmt: skip
+@click.option("--qos-profile-overrides-path", type=click.Path(exists=True, dir_okay=False), metavar="FILE",
+              help="YAML of QoS per topic (rostool applies one profile to all readers).")  # fmt: skip
+@click.option("-f", "--serialization-format", type=click.Choice(["cdr"]), default="cdr", show_default=True,
+              help="Serialization format of the stored messages.")  # fmt: skip
+@click.option("-b", "--max-bag-size", type=click.IntRange(min=0), default=0, metavar="BYTES",
+              help="Split the bag into a new file at this size (0: one file).")  # fmt: skip
+@click.option("-d", "--max-bag-duration", type=click.IntRange(min=0), default=0, metavar="S",
+              help="Split the bag into a new file after S seconds (0: one file).")  # fmt: skip
+@click.option("--max-bag-files", type=click.IntRange(min=0), default=0, metavar="N",
+              help="Keep at most N files, deleting the oldest (needs -b or -d).")  # fmt: skip
+@click.option("--max-cache-size", type=click.IntRange(min=0), default=100 * 1024 * 1024, metavar="BYTES",
+              help="Messages held for the disk; beyond it they are dropped and counted.")  # fmt: skip
+@click.option("--compression-mode", type=click.Choice(["none", "file", "message"]), default="none",
+              show_default=True, help="Compress each file or each message.")  # fmt: skip
+@click.option("--compression-format", type=click.Choice(["", "zstd"]), default="",
+              help="Compression algorithm (zstd).")  # fmt: skip
+@click.option("--use-sim-time", is_flag=True,
+              help="Stamp messages with /clock's time; none is written before the first.")  # fmt: skip
+@click.option(
+    "--node-name", default="rosbag2_recorder", show_default=True, help="Accepted for ros2 bag's sake."
+)
+@click.option(
+    "--custom-data", multiple=True, metavar="KEY=VALUE...", help="Store KEY=VALUE in metadata.yaml."
+)
+@click.option(
+    "--disable-keyboard-controls", is_flag=True, help="Accepted (no keys are read while recording)."
+)
+@click.option("--log-level", type=click.Choice(["debug", "info", "warn", "error", "fatal"]), default="info",
+              help="Accepted for ros2 bag's sake.")  # fmt: skip
+@click.option("--duration", type=click.FloatRange(min=0, min_open=True), metavar="S",
+              help="rostool: stop after S seconds.")  # fmt: skip
+@click.option("-q", "--quiet", is_flag=True, help="rostool: no progress and no summary on stderr.")
+@click.option("-O", "--output-name", metavar="NAME",
+              help="rostool: like -o; NAME.bag writes a ROS 1 bag (messages converted).")  # fmt: skip
+@click.option("--force", is_flag=True, help="rostool: replace an existing output bag (nothing else).")
+@click.option("--compression-queue-size", type=click.IntRange(min=0), default=1, help="Accepted.")
+@click.option("--compression-threads", type=click.IntRange(min=0), default=0, help="Accepted.")
+@click.option("--compression-threads-priority", type=int, default=0, help="Accepted.")
+@click.option("--max-cache-duration", type=click.IntRange(min=0), default=0, help="Accepted.")
+@click.option("--start-paused", is_flag=True, help="Not supported yet (refused in one line).")
+@click.option("--snapshot-mode", is_flag=True, help="Not supported yet (refused in one line).")
+@click.option("--ignore-leaf-topics", is_flag=True, help="Not supported yet (refused in one line).")
+@click.option("--static-topics-path", metavar="FILE", help="Not supported yet (refused in one line).")
+@click.option("--storage-preset-profile", metavar="PROFILE", help="Not supported yet (refused in one line).")
+@click.option("--storage-config-file", metavar="FILE", help="Not supported yet (refused in one line).")
+@interfaces_option
+@qos_options
+@parsed_into(RecordFlags)
+def record(ctx: click.Context, flags: RecordFlags) -> None:
+    """Record ROS 2 data to a bag, as `ros2 bag record` does, until Ctrl+C (or --duration).
+
+    Writes a rosbag2 directory (metadata.yaml and NAME_0.mcap, NAME_1.mcap, ...) that ros2 bag, rosbags
+    and every rostool bag verb read. Messages are stored as received (CDR) with the publisher's QoS and
+    the receive time. With -a/--all-topics/-e/--topic-types, topics that appear later are recorded too.
+    Ctrl+C and SIGTERM leave a complete bag (exit 0).
+
+    \b
+    Examples:
+      rostool --ros2 bag record -a -o run                 # run/metadata.yaml, run/run_0.mcap
+      rostool --ros2 bag record --topics /chatter /odom -s sqlite3
+      rostool --ros2 bag record -e '/camera/.*' -x compressed -b 1000000000 --max-bag-files 5
+      rostool --ros2 bag record -a -d 60 --compression-mode file --compression-format zstd
+      rostool --ros2 bag record /chatter -o chatter.mcap  # one .mcap file, no directory
+    """
+    from rostool.bag.qos_overrides import qos_overrides
+    from rostool.bag.record import RecordOptions
+    from rostool.bag.record_select import HIDDEN, TopicRules, TopicSelector, compile_pattern, services_events
+    from rostool.bag.rosbag2_dir import Rosbag2Layout
+    from rostool.commands.bag._recording import RecordRequest, run_record
+
+    check_flags(flags)
+    topics, services = flags.topic_names, topic_list(flags.services)
+    all_topics, all_services, regex = flags.recording_all_topics, flags.recording_all_services, flags.regex
+    if flags.output and flags.output_name:
+        raise RostoolError("choose one of -o/--output and -O/--output-name")
+    output = (
+        flags.output or flags.output_name or datetime.datetime.now().strftime("rosbag2_%Y_%m_%d-%H_%M_%S")
+    )
+    suffix = Path(output).suffix.lower()
+    single = suffix in (".mcap", ".db3", ".bag")
+    layout = None
+    if not single:
+        layout = Rosbag2Layout(
+            path=Path(output),
+            storage=flags.storage,
+            max_size=flags.max_bag_size,
+            max_duration=float(flags.max_bag_duration),
+            max_files=flags.max_bag_files,
+            compression_mode=flags.compression_mode,
+            compression_format=flags.compression_format,
+            custom_data=dict(entry.partition("=")[::2] for entry in flags.custom_data),
+        )
+        if not flags.force:
+            from rostool.bag.rosbag2_dir import check_output
+
+            check_output(layout.path)
+    elif flags.max_bag_size or flags.max_bag_duration or flags.compression_mode != "none":
+        raise RostoolError(f"{output}: one file cannot be split or compressed; give a directory name instead")
+    overrides = qos_overrides(flags.qos_profile_overrides_path)
+    if overrides is not None and flags.qos.given:
+        raise RostoolError("choose one of --qos-profile-overrides-path and --qos-*")
+    rules = TopicRules(
+        topics=frozenset(topics),
+        services=services_events(services),
+        topic_types=frozenset(topic_list(flags.topic_types)),
+        all_topics=all_topics,
+        all_services=all_services,
+        regex=compile_pattern(regex, "-e/--regex"),
+        exclude_regex=compile_pattern(flags.exclude_regex, "-x/--exclude-regex"),
+        exclude_topics=frozenset(topic_list(flags.exclude_topics)),
+        exclude_types=frozenset(topic_list(flags.exclude_topic_types)),
+        exclude_services=services_events(topic_list(flags.exclude_services)),
+        hidden=flags.include_hidden_topics,
+    )
+    selector = TopicSelector(rules)
+    options = RecordOptions(
+        topics=topics,  # subscribed at once: a publisher that appears later is matched by DDS
+        output_name=output if single else None,
+        fmt={".db3": "db3", ".bag": "bag"}.get(suffix, "mcap"),
+        force=flags.force,
+        duration=flags.duration,
+        buffer_bytes=max(flags.max_cache_size, 1024 * 1024),
+        rosbag2=layout,
+        wanted=selector,
+        use_sim_time=flags.use_sim_time,
+    )
+    hidden = flags.include_hidden_topics or bool(services) or all_services or bool(regex)
+    hidden = hidden or any(HIDDEN.search(t) for t in topics)
+    qos = overrides or flags.qos
+    request = RecordRequest(
+        options, qos, flags.interface_paths, hidden, flags.quiet, "ros2 bag", selector, flags.no_discovery
+    )
+    run_record(ctx, request)
