@@ -28,6 +28,8 @@ from rostool.errors import RostoolError
 from rostool.interfaces.typestores import DEFAULT_DISTRO, StoredDefinition, TypeResolver
 
 MessageTuple = tuple[Connection, int, bytes | memoryview]
+# (connections, start ns, stop ns exclusive) -> their messages in time order
+Messages = Callable[[Sequence[Connection], int | None, int | None], Iterator[MessageTuple]]
 
 _ENCODINGS = {"ros2msg": "msg", "ros2idl": "idl", "msg": "msg", "idl": "idl"}
 
@@ -48,7 +50,7 @@ class _Part:
 
     path: Path
     reader: Any
-    messages: Callable[[Sequence[Connection], int | None, int | None], Iterator[MessageTuple]]
+    messages: Messages
     connections: list[Connection]
     to_ours: dict[int, Connection] = field(default_factory=dict)
     start_ns: int = 2**63 - 1
@@ -153,7 +155,9 @@ class BagReader(AbstractContextManager["BagReader"]):
         messages = _storage_messages(storage, compressed)
         self._add(path, storage, messages, counts, storage.metadata.start_time, storage.metadata.end_time)
 
-    def _add(self, path: Path, reader: Any, messages: Any, counts: bool, start_ns: int, end_ns: int) -> None:
+    def _add(
+        self, path: Path, reader: Any, messages: Messages, counts: bool, start_ns: int, end_ns: int
+    ) -> None:
         conns = list(reader.connections)
         self._register(path, conns, counts)
         part = _Part(path, reader, messages, conns, start_ns=start_ns, end_ns=end_ns)
@@ -276,7 +280,7 @@ def _mapped(part: _Part, stream: Iterator[MessageTuple]) -> Iterator[MessageTupl
             yield to_ours[id(conn)], timestamp, data
 
 
-def _ros1_messages(reader: Any) -> Callable[[Sequence[Connection], int | None, int | None], Iterator[Any]]:
+def _ros1_messages(reader: Any) -> Messages:
     def messages(conns: Sequence[Connection], start: int | None, stop: int | None) -> Iterator[Any]:
         return _ros1_fast(reader, conns, start, stop)
 
@@ -330,9 +334,7 @@ def _ros1_fast(
         yield by_id[conn_id], timestamp, data[body + 4 : body + 4 + size]
 
 
-def _storage_messages(
-    storage: Any, compressed: bool
-) -> Callable[[Sequence[Connection], int | None, int | None], Iterator[Any]]:
+def _storage_messages(storage: Any, compressed: bool) -> Messages:
     if not compressed:
 
         def plain(conns: Sequence[Connection], start: int | None, stop: int | None) -> Iterator[Any]:
