@@ -11,8 +11,8 @@ from typing import Any
 import click
 
 from rostool.commands._common import interfaces_option, live_graph, stdout_is_tty
-from rostool.commands.bag_plot import OUTPUT_HELP
 from rostool.errors import RostoolError
+from rostool.output.plot_file import OUTPUT_HELP, output_file_option
 
 CONTEXT = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
 PATHS_HELP = """\b
@@ -24,9 +24,7 @@ HOME_AND_CLEAR = "\x1b[H\x1b[J"
 
 @click.command(context_settings=CONTEXT)
 @click.argument("paths", nargs=-1, required=True, metavar="FIELD...")
-@click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path), metavar="FILE",
-              help="At the end (--duration or Ctrl+C), draw the last window to FILE "
-              "(.png, .svg, .pdf).")  # fmt: skip
+@output_file_option("At the end (--duration or Ctrl+C), draw the last window to FILE (.png, .svg, .pdf).")
 @click.option("--duration", type=click.FloatRange(min=0, min_open=True), metavar="S",
               help="Stop after S seconds (default: at Ctrl+C).")  # fmt: skip
 @click.option("--window", type=click.FloatRange(min=0, min_open=True), default=30.0, show_default=True,
@@ -104,13 +102,9 @@ def plot(
             raise RostoolError(
                 f"nothing to save to {output}: no message arrived on {', '.join(sampler.topics)}"
             )
-        from rostool.output.plot_draw import save
+        from rostool.output.plot_file import save_figure
 
-        series = sampler.ordered()
-        save(series, output, origin, header_stamp)
-        click.echo(
-            f"wrote {output} ({', '.join(f'{s.name}: {len(s.values)}' for s in series)} points)", err=True
-        )
+        save_figure(sampler.ordered(), output, origin, header_stamp)
 
 
 def _trim(sampler: Any, window: float) -> None:
