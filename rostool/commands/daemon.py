@@ -10,7 +10,7 @@ from rostool.commands._common import json_option, print_json, ros2_backend
 from rostool.errors import RostoolError
 
 if TYPE_CHECKING:
-    from rostool.graph.daemon.client import DaemonClient
+    from rostool.graph import DaemonClient
 
 
 def _client() -> DaemonClient:
