@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import Any, TypeVar
 
 from rostool.bag.formats import FILE_SUFFIXES, storage_kind
+from rostool.bag.rosbag2_metadata import METADATA
 from rostool.errors import RostoolError
 
 _SPLIT = re.compile(r"^(.*)_\d+$")
@@ -33,7 +34,7 @@ class BagItem:
 
 def is_one_bag(path: Path) -> bool:
     """A directory that is itself a bag: rosbag2's metadata.yaml, or storage files of one split bag."""
-    if (path / "metadata.yaml").exists():
+    if (path / METADATA).exists():
         return True
     entries = list(path.iterdir())
     if any(entry.is_dir() or entry.suffix == ".bag" for entry in entries):
@@ -76,7 +77,7 @@ def _expand(paths: Sequence[str | Path]) -> list[BagItem]:
                 raise RostoolError(f"{path}: no bags in this directory (.bag, .mcap, .db3 or rosbag2 dirs)")
             found.extend((bag, _name(bag.relative_to(path))) for bag in inside)
         else:
-            found.append((path, _name(Path(path.parent.name if path.name == "metadata.yaml" else path.name))))
+            found.append((path, _name(Path(path.parent.name if path.name == METADATA else path.name))))
     names = [name for _, name in found]
     items = []
     for path, name in found:
@@ -90,7 +91,7 @@ def _walk(directory: Path) -> Iterator[Path]:
     for entry in directory.iterdir():
         if entry.is_dir():
             storage = any(storage_kind(p) for p in entry.iterdir())
-            if (entry / "metadata.yaml").exists() or (storage and is_one_bag(entry)):
+            if (entry / METADATA).exists() or (storage and is_one_bag(entry)):
                 yield entry
             else:
                 yield from _walk(entry)

@@ -22,7 +22,7 @@ from rostool.bag.formats import (
     storage_kind,
 )
 from rostool.bag.model import BagInput, BagKind
-from rostool.bag.rosbag2_metadata import MetadataError, check_metadata, load_metadata
+from rostool.bag.rosbag2_metadata import METADATA, MetadataError, check_metadata, load_metadata
 from rostool.errors import RostoolError
 
 
@@ -34,7 +34,7 @@ def detect(given: str | Path) -> BagInput:
     path = Path(given)
     if not path.exists():
         raise RostoolError(f"{path}: no such file or directory")
-    if path.is_file() and path.name == "metadata.yaml":
+    if path.is_file() and path.name == METADATA:
         path = path.parent
     if path.is_dir():
         try:
@@ -69,7 +69,7 @@ def detect(given: str | Path) -> BagInput:
 
 
 def _detect_directory(path: Path) -> BagInput:
-    metadata = path / "metadata.yaml"
+    metadata = path / METADATA
     problem = ""
     if metadata.is_file():
         try:

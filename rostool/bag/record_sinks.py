@@ -19,6 +19,7 @@ from rostool.bag.crossver import CrossVersionStores
 from rostool.bag.model import BagFormat
 from rostool.bag.replace import remove_bag, swap_into_place
 from rostool.bag.ros1_writer import BagWriter, WriteFailed
+from rostool.bag.rosbag2_metadata import METADATA
 from rostool.errors import RostoolError
 from rostool.graph.recording import RecordSource
 
@@ -243,7 +244,7 @@ class Ros2Sink:
         import yaml
 
         with contextlib.suppress(OSError, yaml.YAMLError, TypeError):
-            text = (self.active / "metadata.yaml").read_text()
+            text = (self.active / METADATA).read_text()
             self.metadata = yaml.safe_load(text)["rosbag2_bagfile_information"]
         produced = self.active / f"{self.active.name}{self.fmt.suffix}"
         if not produced.exists():  # file compression: NAME.mcap.zstd

@@ -17,6 +17,7 @@ from pathlib import Path
 from rostool.bag.formats import FORMATS, sniff, storage_kind
 from rostool.bag.model import BagFormat, ReindexResult
 from rostool.bag.open import detect
+from rostool.bag.rosbag2_metadata import METADATA
 from rostool.bag.rosbag2_reindex import reindex_rosbag2
 from rostool.errors import RostoolError
 
@@ -27,8 +28,8 @@ def backup_path(path: Path) -> Path:
 
 
 def reindex(given: str | Path) -> ReindexResult:
-    if Path(given).is_dir() or Path(given).name == "metadata.yaml":
-        directory = Path(given).parent if Path(given).name == "metadata.yaml" else Path(given)
+    if Path(given).is_dir() or Path(given).name == METADATA:
+        directory = Path(given).parent if Path(given).name == METADATA else Path(given)
         return reindex_rosbag2(directory, *_storage_files(directory))
     bag = detect(given)
     rebuild = FORMATS[bag.kind].rebuild

@@ -20,6 +20,7 @@ from pathlib import Path, PurePosixPath
 from typing import Any
 
 from rostool.bag.formats import FILE_SUFFIXES
+from rostool.bag.rosbag2_metadata import METADATA
 from rostool.errors import RostoolError
 
 _URI = re.compile(r"^[A-Za-z][A-Za-z0-9+.-]*://")
@@ -116,11 +117,9 @@ def list_bags(remote: RemotePath) -> list[RemotePath]:
     entries = _entries(remote, recursive=True)
     base = remote.path.rstrip("/") + "/"
     files = sorted(e.path[len(base) :] for e in entries if e.type == pafs.FileType.File)
-    if "metadata.yaml" in files:
+    if METADATA in files:
         return [remote]
-    rosbag2 = sorted(
-        {str(PurePosixPath(f).parent) for f in files if PurePosixPath(f).name == "metadata.yaml"}
-    )
+    rosbag2 = sorted({str(PurePosixPath(f).parent) for f in files if PurePosixPath(f).name == METADATA})
     bags = [remote.child(d) for d in rosbag2]
     for relative in files:
         inside = any(relative.startswith(d + "/") for d in rosbag2)

@@ -16,10 +16,11 @@ from collections.abc import Iterable
 from pathlib import Path
 
 from rostool.bag.formats import FILE_SUFFIXES, FILES, ZSTD_MAGIC
+from rostool.bag.rosbag2_metadata import METADATA, METADATA_TMP
 from rostool.errors import RostoolError
 
 _MAGICS = (*(fmt.magic for fmt in FILES), ZSTD_MAGIC)  # zstd: NAME_0.mcap.zstd, a file-compressed storage
-_DIR_FILES = {"metadata.yaml", "metadata.yaml.tmp"}
+_DIR_FILES = {METADATA, METADATA_TMP}
 _SUFFIXES = (*FILE_SUFFIXES, ".active", ".zstd")  # .active: what a recorder is writing
 
 

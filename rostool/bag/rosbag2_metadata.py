@@ -11,6 +11,8 @@ from rostool.bag.model import BagInfo, BagInput, TopicInfo, TypeInfo
 from rostool.errors import RostoolError, one_line, yaml_problem
 
 KEY = "rosbag2_bagfile_information"
+METADATA = "metadata.yaml"  # the file that makes a directory a rosbag2 bag
+METADATA_TMP = "metadata.yaml.tmp"  # written first, then moved over METADATA
 
 
 class MetadataError(RostoolError):
@@ -138,8 +140,8 @@ def write_metadata(directory: Path, body: dict[str, Any]) -> None:
     """DIR/metadata.yaml holding `body`, replaced in one step (a reader sees the old or the new one)."""
     import yaml
 
-    target = directory / "metadata.yaml"
-    temporary = target.with_name("metadata.yaml.tmp")
+    target = directory / METADATA
+    temporary = target.with_name(METADATA_TMP)
     temporary.write_text(yaml.safe_dump({KEY: body}, sort_keys=False))
     os.replace(temporary, target)
 

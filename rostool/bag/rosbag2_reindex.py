@@ -16,7 +16,7 @@ from typing import Any
 from rostool.bag.failures import guard
 from rostool.bag.mcap_reindex import mcap_complete, rebuild_mcap
 from rostool.bag.model import BagFormat, ReindexResult
-from rostool.bag.rosbag2_metadata import check_metadata, load_metadata, write_metadata
+from rostool.bag.rosbag2_metadata import METADATA, check_metadata, load_metadata, write_metadata
 from rostool.errors import RostoolError
 
 METADATA_VERSION = 8  # what `bag record` writes (rosbags' writer, version=8)
@@ -57,7 +57,7 @@ def reindex_rosbag2(directory: Path, files: list[Path], fmt: BagFormat) -> Reind
 
 
 def _complete(directory: Path, files: list[Path], fmt: BagFormat) -> bool:
-    metadata = directory / "metadata.yaml"
+    metadata = directory / METADATA
     if not metadata.is_file():
         return False
     try:
