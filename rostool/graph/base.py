@@ -13,6 +13,8 @@ if TYPE_CHECKING:
 
 @dataclass
 class TopicInfo:
+    """A topic as the listings show it: its type and the nodes that publish and subscribe to it."""
+
     name: str
     type: str
     publishers: list[str] = field(default_factory=list)
@@ -153,6 +155,10 @@ class Received:
         return self.decoder(self.payload)
 
 
+OnMessage = Callable[[Received], None]
+OnError = Callable[[str], None]
+
+
 class Subscription(Protocol):
     def close(self) -> None: ...
 
@@ -166,6 +172,22 @@ class Publisher(Protocol):
     def subscriber_count(self) -> int: ...
 
 
+class RawPublisher(Publisher, Protocol):
+    """bag play's publisher: messages as bytes in the graph's `encoding`."""
+
+    def publish_raw(self, payload: bytes) -> None: ...
+
+
+class ParameterDescriptor(TypedDict):
+    """`Parameters.descriptor`'s facts (ros2 param describe)."""
+
+    name: str
+    type: str
+    description: str
+    additional_constraints: str
+    read_only: bool
+
+
 class Parameters(Protocol):
     """One node's parameters. `set`/`delete` return (successful, the node's reason); `show` returns the
     value and the text the style's tool prints for it; `load` returns (name, successful, reason) lines."""
@@ -176,7 +198,7 @@ class Parameters(Protocol):
     def show(self, name: str) -> tuple[Any, str]: ...
     def set(self, name: str, value: Any) -> tuple[bool, str]: ...
     def delete(self, name: str) -> tuple[bool, str]: ...
-    def descriptor(self, name: str) -> dict[str, Any]: ...
+    def descriptor(self, name: str) -> ParameterDescriptor: ...
     def dump(self) -> Any: ...
     def load(self, document: Any, use_wildcard: bool, source: str) -> list[tuple[str, bool, str]]: ...
 
@@ -221,7 +243,7 @@ class Graph(Protocol):
     ) -> Subscription: ...
     def publisher(self, topic: str, type_name: str, latch: bool = False) -> Publisher: ...
     # bag play: a publisher of bytes in `encoding` (`publish_raw`) for a type of `types`
-    def raw_publisher(self, topic: str, wire_type: Any, latch: bool = False) -> Any: ...
+    def raw_publisher(self, topic: str, wire_type: Any, latch: bool = False) -> RawPublisher: ...
     def record_source(self, warn: Callable[[str], None], include_hidden: bool = False) -> RecordSource: ...
     def message_class(self, type_name: str) -> type: ...
     def build_message(self, type_name: str, value: Any) -> Any: ...
@@ -237,7 +259,9 @@ class Graph(Protocol):
     def service_info(self, name: str) -> ServiceInfo | None: ...  # what the style's info prints
     def find_services(self, type_name: str) -> list[str]: ...
     # call with the command-line values (in the style's forms): (request, response)
-    def service_call(self, name: str, values: tuple[str, ...], wait: bool, timeout: float | None) -> Any: ...
+    def service_call(
+        self, name: str, values: tuple[str, ...], wait: bool, timeout: float | None
+    ) -> tuple[Any, Any]: ...
 
     # actions: summaries have name, type, servers, clients
     def actions(self) -> list[ActionSummary]: ...

@@ -1,6 +1,6 @@
-"""The Graph interface over rclpy: the user's own client library and RMW see the graph; rosbags makes and
-reads every message byte (subscriptions are raw, publishers publish serialized bytes), so the verbs print
-exactly what they print with the DDS backend.
+"""The ROS 2 graph (ros2_base) over rclpy, the transport only: the user's own client library and RMW see the
+graph; rosbags makes and reads every message byte (subscriptions are raw, publishers publish serialized
+bytes), so the verbs print exactly what they print with the DDS backend.
 
 Listing verbs wait until the graph rmw reports stops changing (GRAPH_QUIET_SECONDS after something other
 than this process was seen, at most SETTLE_MAX_SECONDS when nothing is), as discovery takes a moment.
@@ -9,7 +9,7 @@ than this process was seen, at most SETTLE_MAX_SECONDS when nothing is), as disc
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable
 from typing import TYPE_CHECKING, Any
 
 from rostool.errors import RostoolError
@@ -22,7 +22,7 @@ from rostool.graph.ros2_base.transport import EndpointView
 from rostool.interfaces.names import hidden_name
 
 if TYPE_CHECKING:
-    from rostool.graph.base import GoalOutcome, GoalWatcher, Received, Subscription
+    from rostool.graph.base import GoalOutcome, GoalWatcher, OnError, OnMessage, Subscription
     from rostool.graph.rclpy.context import RclpyContext
     from rostool.graph.rclpy.services import RclpyServiceClient
     from rostool.graph.ros2_base.qos import QosProfile
@@ -43,20 +43,12 @@ TOPIC_WAIT_SECONDS = 1.5  # topic_type: how long a topic without publishers is g
 class RclpyGraph(Ros2Base):
     """The transport is one rclpy context and node (`context.py`), started on first need."""
 
-    def __init__(
-        self,
-        node_name: str = "rostool",
-        distro: str | None = None,
-        anonymous: bool = True,
-        interface_paths: Sequence[str] = (),
-    ) -> None:
+    def _prepare(self, distro: str | None) -> None:
         from rostool.graph.rclpy.facts import rclpy_distro
         from rostool.interfaces.typestores import DEFAULT_DISTRO, DISTROS
 
-        super().__init__(node_name, anonymous)
         found = distro or rclpy_distro()[0]
         self._distro = found if found in DISTROS else DEFAULT_DISTRO
-        self._interface_paths = tuple(interface_paths)
         self._types: Ros2Types | None = None
         self._context: RclpyContext | None = None
         self._settled = False
@@ -69,7 +61,7 @@ class RclpyGraph(Ros2Base):
         if self._types is None:
             from rostool.interfaces.ros2_types import Ros2Types
 
-            self._types = Ros2Types(self._distro, self._interface_paths)
+            self._types = Ros2Types(self._distro, self.interface_paths)
         return self._types
 
     @property
@@ -243,9 +235,7 @@ class RclpyGraph(Ros2Base):
         return node in {self.full_name(n, ns) for n, ns in self.node_pairs()}
 
     # --- topics -------------------------------------------------------------------------------
-    def _subscription(
-        self, topic: str, on_message: Callable[[Received], None], on_error: Callable[[str], None]
-    ) -> Subscription:
+    def _subscription(self, topic: str, on_message: OnMessage, on_error: OnError) -> Subscription:
         from rostool.graph.rclpy.subscription import RclpySubscription
 
         return RclpySubscription(self, topic, on_message, on_error)

@@ -13,7 +13,6 @@ from rostool.graph.rclpy.qos import to_rclpy
 from rostool.graph.ros2_base.subscription import DrainingSubscription
 
 if TYPE_CHECKING:
-    from rostool.graph.base import Received
     from rostool.graph.rclpy.host import RclpyHost
     from rostool.graph.ros2_base.qos import QosProfile
     from rostool.graph.ros2_base.transport import EndpointView
@@ -23,18 +22,11 @@ class RclpySubscription(DrainingSubscription):
     thread_name = "rclpy sub"
     _graph: RclpyHost
 
-    def __init__(
-        self,
-        graph: RclpyHost,
-        topic: str,
-        on_message: Callable[[Received], None],
-        on_error: Callable[[str], None],
-    ) -> None:
+    def _setup(self) -> None:
         self._incompatible = threading.Event()
         self._reader: Any = None
         self._detached = False
         self._policy = "?"
-        super().__init__(graph, topic, on_message, on_error)
 
     def _wake(self) -> None:
         self._incompatible.set()

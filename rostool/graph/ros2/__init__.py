@@ -1,5 +1,7 @@
-"""ROS 2 live graph spoken directly over DDS (Eclipse Cyclone DDS's Python binding), no rclpy.
+"""The DDS transport of the ROS 2 graph (`graph/ros2_base/`): Eclipse Cyclone DDS's Python binding, no rclpy.
 
-`dds.py` participant, configuration and QoS; `names.py` ROS <-> DDS names; `types.py` message types and
-their DDS registration; `discovery.py` the graph cache; `graph.py` the Graph the verbs use.
+`dds.py` participant and Cyclone configuration; `session.py` the participant with its announced node,
+readers and writers; `discovery.py` the graph cache; `types.py` message types and their DDS registration;
+`services.py` and `actions.py` rmw's request/reply and action conventions; `type_description.py` REP 2016;
+`graph.py` the transport methods of `Ros2Base`.
 """

@@ -43,7 +43,8 @@ from rostool.interfaces.ros2_action import register_action
 
 if TYPE_CHECKING:
     from rostool.graph.base import GoalOutcome, GoalWatcher
-    from rostool.graph.ros2.graph import Ros2Graph, Session
+    from rostool.graph.ros2.session import Session
+    from rostool.graph.ros2_base.transport import Ros2Host
 
 FEEDBACK_QOS = PROFILES["default"]
 STATUS_QOS = QosProfile("reliable", "transient_local", 1)
@@ -139,11 +140,17 @@ class ActionClient:
 
 
 def send_goal(
-    graph: Ros2Graph, name: str, kind: str | None, value: Any, timeout: float | None, watcher: GoalWatcher
+    graph: Ros2Host,
+    session: Session,
+    name: str,
+    kind: str | None,
+    value: Any,
+    timeout: float | None,
+    watcher: GoalWatcher,
 ) -> GoalOutcome:
-    """`ros2 action send_goal`: the goal is canceled first on timeout or Ctrl+C."""
+    """`ros2 action send_goal` through `session`: the goal is canceled first on timeout or Ctrl+C."""
     action = resolve(name)
-    client = ActionClient(graph.session, action, action_type(graph, action, kind))
+    client = ActionClient(session, action, action_type(graph, action, kind))
     goal = client.build_goal(value)  # bad values fail here, before anything is sent
     started = time.monotonic()
     limit = timeout if timeout is not None else float("inf")

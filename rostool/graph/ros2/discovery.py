@@ -54,6 +54,8 @@ class Endpoint:
 
 @dataclass
 class NodeEntry:
+    """One node of a participant as ros_discovery_info describes it, with its readers' and writers' GIDs."""
+
     namespace: str
     name: str
     readers: list[bytes] = field(default_factory=list)

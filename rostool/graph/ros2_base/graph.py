@@ -8,11 +8,19 @@ from __future__ import annotations
 import os
 import sys
 import threading
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Sequence
 from typing import TYPE_CHECKING, Any, Literal
 
 from rostool.errors import RostoolError
-from rostool.graph.base import ActionInfo, NodeInfo, Received, Subscription, TopicEndpoint, TopicInfo
+from rostool.graph.base import (
+    ActionInfo,
+    NodeInfo,
+    OnError,
+    OnMessage,
+    Subscription,
+    TopicEndpoint,
+    TopicInfo,
+)
 from rostool.graph.ros2_base import actions
 from rostool.graph.ros2_base.calls import call_service, service_info_facts
 from rostool.graph.ros2_base.env import domain_id
@@ -49,7 +57,13 @@ class Ros2Base:
     encoding: Encoding = "cdr"
     types: Ros2Types
 
-    def __init__(self, node_name: str, anonymous: bool) -> None:
+    def __init__(
+        self,
+        node_name: str = "rostool",
+        distro: str | None = None,
+        anonymous: bool = True,
+        interface_paths: Sequence[str] = (),
+    ) -> None:
         domain_id()  # a bad ROS_DOMAIN_ID fails in one line before anything starts
         self.qos_request = QosRequest()
         self.warn: Callable[[str], None] = lambda text: print(f"WARNING: {text}", file=sys.stderr)
@@ -58,8 +72,15 @@ class Ros2Base:
         self._lock = threading.Lock()
         self._subscriptions: list[Subscription] = []
         self.require_peers = True  # False: an empty graph lists nothing instead of failing (the daemon)
+        self.interface_paths = tuple(interface_paths)
+        self._prepare(distro)
 
     # --- transport: what each backend provides ---------------------------------------------------
+    def _prepare(self, distro: str | None) -> None:
+        """Check the transport's settings and make its type support for `distro` (None: the one found);
+        the transport itself starts on first need."""
+        raise NotImplementedError
+
     def _start(self) -> None:
         """Join the graph now (not later, in a subscription's thread)."""
         raise NotImplementedError
@@ -94,9 +115,7 @@ class Ros2Base:
     def _writer(self, topic: str, store_name: str, profile: QosProfile) -> Writer:
         raise NotImplementedError
 
-    def _subscription(
-        self, topic: str, on_message: Callable[[Received], None], on_error: Callable[[str], None]
-    ) -> Subscription:
+    def _subscription(self, topic: str, on_message: OnMessage, on_error: OnError) -> Subscription:
         raise NotImplementedError
 
     def store_name(self, type_name: str) -> str:
@@ -215,12 +234,7 @@ class Ros2Base:
         views = self.topic_views(resolved)
         return views[0].type_name if views else None
 
-    def subscribe(
-        self,
-        topic: str,
-        on_message: Callable[[Received], None],
-        on_error: Callable[[str], None] | None = None,
-    ) -> Subscription:
+    def subscribe(self, topic: str, on_message: OnMessage, on_error: OnError | None = None) -> Subscription:
         self._start()
         sub = self._subscription(resolve(topic), on_message, on_error or self.warn)
         self._subscriptions.append(sub)

@@ -13,6 +13,7 @@ from rostool.errors import RostoolError
 from rostool.interfaces.fill import build_message
 
 if TYPE_CHECKING:
+    from rostool.graph.base import ParameterDescriptor
     from rostool.graph.ros2_base.transport import Ros2Host, ServiceClient
 
 NOT_SET, BOOL, INTEGER, DOUBLE, STRING = 0, 1, 2, 3, 4
@@ -312,7 +313,7 @@ class NodeParameters(ParameterClient):
             raise RostoolError(f"parameter {name} is not set on node {self.node}")
         return to_python(value), describe_value(value)
 
-    def descriptor(self, name: str) -> dict[str, Any]:
+    def descriptor(self, name: str) -> ParameterDescriptor:
         d = self.describe(name)
         return {"name": d.name, "type": TYPE_NAMES.get(int(d.type), str(d.type)),
                 "description": d.description, "additional_constraints": d.additional_constraints,

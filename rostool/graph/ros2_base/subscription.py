@@ -15,7 +15,7 @@ from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
 from rostool.errors import RostoolError
-from rostool.graph.base import Received
+from rostool.graph.base import OnError, OnMessage, Received
 from rostool.graph.ros2_base.qos import adapt_to_publishers, serves
 
 if TYPE_CHECKING:
@@ -29,23 +29,21 @@ SUBSCRIBERS_ONLY_WAIT = 0.5  # a topic with subscribers only: how long publisher
 class DrainingSubscription:
     thread_name = "ros2 sub"
 
-    def __init__(
-        self,
-        graph: Ros2Host,
-        topic: str,
-        on_message: Callable[[Received], None],
-        on_error: Callable[[str], None],
-    ) -> None:
+    def __init__(self, graph: Ros2Host, topic: str, on_message: OnMessage, on_error: OnError) -> None:
         self._graph = graph
         self._topic = topic
         self._on_message = on_message
         self._on_error = on_error
         self._closed = threading.Event()
+        self._setup()
         self._since = self._discovery_started()
         self._thread = threading.Thread(target=self._run, name=f"{self.thread_name} {topic}", daemon=True)
         self._thread.start()
 
     # --- the transport's -------------------------------------------------------------------------------
+    def _setup(self) -> None:
+        """The transport's own state, made before the thread starts."""
+
     def _discovery_started(self) -> float:
         """Since when (monotonic) discovery has been looking: a topic with subscribers only is given
         SUBSCRIBERS_ONLY_WAIT from then for a publisher to show up."""

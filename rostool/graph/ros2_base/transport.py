@@ -8,8 +8,9 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Protocol
 
+from rostool.graph.base import Graph
+
 if TYPE_CHECKING:
-    from rostool.graph.base import Received, Subscription, TopicInfo
     from rostool.graph.ros2_base.qos import QosProfile, QosRequest
     from rostool.interfaces.ros2_types import Ros2Types
 
@@ -60,37 +61,19 @@ class ServiceClient(Protocol):
     def close(self) -> None: ...
 
 
-class Ros2Host(Protocol):
-    """What the shared pieces (subscriptions, recording, parameters, calls, actions) ask of a ROS 2 graph."""
+class Ros2Host(Graph, Protocol):
+    """What the shared pieces (subscriptions, recording, parameters, calls, actions) ask of a ROS 2 graph
+    beyond the Graph protocol: the transport's view of endpoints and services."""
 
     types: Ros2Types
     qos_request: QosRequest
     warn: Callable[[str], None]
-
-    def resolve(self, name: str) -> str: ...
-
-    def close(self) -> None: ...
-
-    def topics(self) -> list[TopicInfo]: ...
-
-    def services(self) -> list[tuple[str, str | None, list[str]]]: ...
 
     def service_endpoints(self, nodes: bool = False) -> list[tuple[str, str, list[str], list[str]]]: ...
 
     def find_service_type(self, service: str) -> str | None: ...
 
     def service_client(self, service: str, srv_type: str) -> ServiceClient: ...
-
-    def message_class(self, type_name: str) -> type: ...
-
-    def build_message(self, type_name: str, value: Any) -> Any: ...
-
-    def subscribe(
-        self,
-        topic: str,
-        on_message: Callable[[Received], None],
-        on_error: Callable[[str], None] | None = None,
-    ) -> Subscription: ...
 
     def topic_views(self, topic: str) -> list[EndpointView]: ...
 
