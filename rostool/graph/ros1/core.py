@@ -9,7 +9,16 @@ from collections.abc import Callable, Sequence
 from typing import Any, TypeVar
 
 from rostool.errors import RostoolError
-from rostool.graph.base import Connection, NodeInfo, Publisher, Received, Subscription, TopicInfo
+from rostool.graph.base import (
+    Connection,
+    NodeInfo,
+    OnError,
+    OnMessage,
+    Publisher,
+    Received,
+    Subscription,
+    TopicInfo,
+)
 from rostool.graph.ros1 import env
 from rostool.graph.ros1.master_client import MasterClient, RemoteError, Unreachable, call
 from rostool.graph.ros1.names import anonymous, resolve
@@ -118,12 +127,7 @@ class Ros1Core:
     def topic_type(self, name: str) -> str | None:
         return self.master.topic_types().get(resolve(name))
 
-    def subscribe(
-        self,
-        topic: str,
-        on_message: Callable[[Received], None],
-        on_error: Callable[[str], None] | None = None,
-    ) -> Subscription:
+    def subscribe(self, topic: str, on_message: OnMessage, on_error: OnError | None = None) -> Subscription:
         resolved = resolve(topic)
         registry = self.types
         decoders: dict[int, Callable[[bytes], Any]] = {}

@@ -8,6 +8,7 @@ from rostool.errors import RostoolError
 from rostool.graph.ros1.master_client import RemoteError
 
 if TYPE_CHECKING:
+    from rostool.graph.base import ParameterDescriptor
     from rostool.graph.ros1.core import Ros1Core
 
 
@@ -60,7 +61,7 @@ class ServerParameters:
             raise RostoolError(f"parameter {name} is not set, nothing to delete") from err
         return True, ""
 
-    def descriptor(self, name: str) -> dict[str, Any]:
+    def descriptor(self, name: str) -> ParameterDescriptor:
         raise RostoolError("param describe applies to ROS 2 nodes (ROS 1 parameters have no descriptors)")
 
     def dump(self) -> Any:
