@@ -32,7 +32,8 @@ class PlayRequest:
 
 
 def run_play(ctx: click.Context, request: PlayRequest) -> None:
-    from rostool.bag.play import Console, Player
+    from rostool.bag.play import Player
+    from rostool.bag.play_console import Console
     from rostool.bag.play_ros2 import Ros2Player
     from rostool.bag.play_topics import present_topics
     from rostool.bag.reader import BagReader

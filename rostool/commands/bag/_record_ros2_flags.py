@@ -1,5 +1,5 @@
-"""ros2 bag record's flags as parsed (`RecordFlags`), and its validate_parsed_arguments, message for
-message."""
+"""ros2 bag record's flags as parsed (`RecordFlags`), its validate_parsed_arguments, message for message, and
+the topic rules they make."""
 
 from __future__ import annotations
 
@@ -7,6 +7,7 @@ from dataclasses import dataclass
 
 import click
 
+from rostool.bag.record_select import HIDDEN, TopicRules, compile_pattern, services_events
 from rostool.commands.bag._options import topic_list
 from rostool.errors import RostoolError
 from rostool.graph.qos import QosRequest
@@ -79,6 +80,12 @@ class RecordFlags:
     def recording_all_services(self) -> bool:
         return self.all_ or self.all_services
 
+    @property
+    def hidden_topics_needed(self) -> bool:
+        """Asked for, or services (their event topics are hidden), or -e, or a hidden name in --topics."""
+        needed = self.include_hidden_topics or bool(topic_list(self.services)) or self.recording_all_services
+        return needed or bool(self.regex) or any(HIDDEN.search(t) for t in self.topic_names)
+
 
 def check_flags(flags: RecordFlags) -> None:
     """Refuse what rostool cannot do and what ros2 bag refuses; warn where ros2 bag warns."""
@@ -130,3 +137,20 @@ def check_flags(flags: RecordFlags) -> None:
     for given, text in warn:
         if given:
             click.echo(f"[WARN] [ros2bag]: {text}", err=True)
+
+
+def topic_rules(flags: RecordFlags) -> TopicRules:
+    """Which topics and services to record (the regular expressions compiled: a bad one is one line)."""
+    return TopicRules(
+        topics=frozenset(flags.topic_names),
+        services=services_events(topic_list(flags.services)),
+        topic_types=frozenset(topic_list(flags.topic_types)),
+        all_topics=flags.recording_all_topics,
+        all_services=flags.recording_all_services,
+        regex=compile_pattern(flags.regex, "-e/--regex"),
+        exclude_regex=compile_pattern(flags.exclude_regex, "-x/--exclude-regex"),
+        exclude_topics=frozenset(topic_list(flags.exclude_topics)),
+        exclude_types=frozenset(topic_list(flags.exclude_topic_types)),
+        exclude_services=services_events(topic_list(flags.exclude_services)),
+        hidden=flags.include_hidden_topics,
+    )

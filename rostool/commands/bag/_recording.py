@@ -12,7 +12,7 @@ from typing import Literal
 
 import click
 
-from rostool.bag.record import RecordOptions, RecordResult, RecordStatus
+from rostool.bag.record_options import RecordOptions, RecordResult, RecordStatus
 from rostool.bag.record_select import TopicSelector
 from rostool.errors import RostoolError
 from rostool.graph.qos import QosRequest

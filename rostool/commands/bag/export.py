@@ -2,14 +2,11 @@
 
 from __future__ import annotations
 
-from functools import partial
 from pathlib import Path
-from typing import Any
 
 import click
 
-from rostool.bag.export import ExportOptions, ExportResult
-from rostool.bag.many import BagItem
+from rostool.bag.export import ExportOptions
 from rostool.commands.bag._options import CONTEXT, distro_option, jobs_option, topic_list, topics_option
 from rostool.errors import RostoolError
 
@@ -76,7 +73,8 @@ def export(
     """
     from rostool.bag.copy_many import make_output_folder
     from rostool.bag.export import require_extras
-    from rostool.bag.many import expand, successes
+    from rostool.bag.export_many import export_bags
+    from rostool.bag.many import expand
 
     if output is None and images is None:
         raise RostoolError("say where to write: -o DIR for the tables and/or --images DIR for the images")
@@ -100,9 +98,6 @@ def export(
     for where in (options.out if remote_out is None else None, options.images):
         if where is not None:
             make_output_folder(where)
-    several = len(items) > 1
-    total = ExportResult("")
-    exported = 0
     runner = None
     if engine == "ray":
         from rostool.bag.ray_engine import runner as ray_runner
@@ -110,43 +105,9 @@ def export(
         runner = ray_runner(ray_address)
     elif ray_address:
         raise RostoolError("--ray-address is for --engine ray")
-    for _item, result in successes(
-        partial(_export_one, options, several, remote_out),
-        items,
-        jobs,
-        "exporting",
-        keep_going,
-        runner=runner,
-    ):
-        exported += 1
-        total.messages += result.messages
-        total.images += result.images
-        total.files.extend(result.files)
+    total, exported = export_bags(items, options, remote_out, jobs, keep_going, runner)
     outputs = (remote_out if remote_out is not None else options.out, options.images)
     where = " and ".join(str(p) for p in outputs if p is not None)
-    bags_text = f" from {exported} bags" if several else ""
+    bags_text = f" from {exported} bags" if len(items) > 1 else ""
     pictures = f" ({total.images} images)" if options.images is not None else ""
     click.echo(f"exported {total.messages} messages{bags_text}{pictures} to {where}", err=True)
-
-
-def _export_one(options: ExportOptions, several: bool, remote_out: Any, item: BagItem) -> ExportResult:
-    """One bag's export; into object storage (`remote_out`): written locally, uploaded when complete."""
-    import sys
-
-    from rostool.bag.export import export_bag
-
-    progress = not several and sys.stderr.isatty()
-    partition = item.name if several else None
-    if remote_out is None:
-        return export_bag(item.path, options, partition=partition, progress=progress)
-    import tempfile
-    from dataclasses import replace
-
-    from rostool.bag.remote import upload
-
-    with tempfile.TemporaryDirectory(prefix="rostool-export-") as stage:
-        result = export_bag(
-            item.path, replace(options, out=Path(stage)), partition=partition, progress=progress
-        )
-        result.files = upload(Path(stage), remote_out)
-    return result

@@ -87,7 +87,7 @@ def record(ctx: click.Context, flags: RecordFlags) -> None:
       rostool bag record --node /move_base -l 100
       rostool bag record -a --duration 30s --format mcap
     """
-    from rostool.bag.record import RecordOptions
+    from rostool.bag.record_options import RecordOptions
     from rostool.commands.bag._recording import RecordRequest, run_record
 
     if flags.output_name and flags.output_prefix:

@@ -12,8 +12,8 @@ import click
 from rostool.commands._common import interfaces_option
 from rostool.commands._qos import qos_options
 from rostool.commands.bag._flags import ListCommand, parsed_into
-from rostool.commands.bag._options import CONTEXT, topic_list
-from rostool.commands.bag._record_ros2_flags import RecordFlags, check_flags
+from rostool.commands.bag._options import CONTEXT
+from rostool.commands.bag._record_ros2_flags import RecordFlags, check_flags, topic_rules
 from rostool.errors import RostoolError
 
 RECORD_LISTS = (
@@ -126,14 +126,12 @@ def record(ctx: click.Context, flags: RecordFlags) -> None:
       rostool --ros2 bag record /chatter -o chatter.mcap  # one .mcap file, no directory
     """
     from rostool.bag.qos_overrides import qos_overrides
-    from rostool.bag.record import RecordOptions
-    from rostool.bag.record_select import HIDDEN, TopicRules, TopicSelector, compile_pattern, services_events
+    from rostool.bag.record_options import RecordOptions
+    from rostool.bag.record_select import TopicSelector
     from rostool.bag.rosbag2_dir import Rosbag2Layout
     from rostool.commands.bag._recording import RecordRequest, run_record
 
     check_flags(flags)
-    topics, services = flags.topic_names, topic_list(flags.services)
-    all_topics, all_services, regex = flags.recording_all_topics, flags.recording_all_services, flags.regex
     if flags.output and flags.output_name:
         raise RostoolError("choose one of -o/--output and -O/--output-name")
     output = (
@@ -162,22 +160,9 @@ def record(ctx: click.Context, flags: RecordFlags) -> None:
     overrides = qos_overrides(flags.qos_profile_overrides_path)
     if overrides is not None and flags.qos.given:
         raise RostoolError("choose one of --qos-profile-overrides-path and --qos-*")
-    rules = TopicRules(
-        topics=frozenset(topics),
-        services=services_events(services),
-        topic_types=frozenset(topic_list(flags.topic_types)),
-        all_topics=all_topics,
-        all_services=all_services,
-        regex=compile_pattern(regex, "-e/--regex"),
-        exclude_regex=compile_pattern(flags.exclude_regex, "-x/--exclude-regex"),
-        exclude_topics=frozenset(topic_list(flags.exclude_topics)),
-        exclude_types=frozenset(topic_list(flags.exclude_topic_types)),
-        exclude_services=services_events(topic_list(flags.exclude_services)),
-        hidden=flags.include_hidden_topics,
-    )
-    selector = TopicSelector(rules)
+    selector = TopicSelector(topic_rules(flags))
     options = RecordOptions(
-        topics=topics,  # subscribed at once: a publisher that appears later is matched by DDS
+        topics=flags.topic_names,  # subscribed at once: a publisher that appears later is matched by DDS
         output_name=output if single else None,
         fmt={".db3": "db3", ".bag": "bag"}.get(suffix, "mcap"),
         force=flags.force,
@@ -187,10 +172,14 @@ def record(ctx: click.Context, flags: RecordFlags) -> None:
         wanted=selector,
         use_sim_time=flags.use_sim_time,
     )
-    hidden = flags.include_hidden_topics or bool(services) or all_services or bool(regex)
-    hidden = hidden or any(HIDDEN.search(t) for t in topics)
-    qos = overrides or flags.qos
     request = RecordRequest(
-        options, qos, flags.interface_paths, hidden, flags.quiet, "ros2 bag", selector, flags.no_discovery
+        options=options,
+        qos=overrides or flags.qos,
+        interface_paths=flags.interface_paths,
+        include_hidden=flags.hidden_topics_needed,
+        quiet=flags.quiet,
+        form="ros2 bag",
+        selector=selector,
+        no_discovery=flags.no_discovery,
     )
     run_record(ctx, request)
