@@ -14,16 +14,19 @@ import errno
 import os
 from pathlib import Path
 
-from rostool.bag.formats import FORMATS, sniff, storage_kind
+from rostool.bag.formats import FILES, FORMATS, STORAGES, sniff, storage_kind
 from rostool.bag.model import BagFormat, ReindexResult
 from rostool.bag.open import detect
 from rostool.bag.rosbag2_metadata import METADATA
 from rostool.bag.rosbag2_reindex import reindex_rosbag2
 from rostool.errors import RostoolError
 
+_REBUILT_SUFFIXES = tuple(fmt.suffix for fmt in FILES if fmt.rebuild is not None)  # .bag, .mcap
+
 
 def backup_path(path: Path) -> Path:
-    suffix = path.suffix if path.suffix in (".bag", ".mcap") else ""
+    """NAME.orig.bag / NAME.orig.mcap beside a rebuilt file (any other name gets `.orig.bag` added)."""
+    suffix = path.suffix if path.suffix in _REBUILT_SUFFIXES else ""
     return path.with_name(f"{path.name.removesuffix(suffix)}.orig{suffix or '.bag'}")
 
 
@@ -61,7 +64,7 @@ def _storage_files(directory: Path) -> tuple[list[Path], BagFormat]:
     kinds = {sniff(p) if p.stat().st_size else None for p in files}
     if not files:
         raise RostoolError(f"{directory}: no .mcap or .db3 storage files to reindex")
-    if len(kinds) != 1 or kinds.pop() not in ("mcap", "db3"):
+    if len(kinds) != 1 or kinds.pop() not in {fmt.kind for fmt in STORAGES}:
         raise RostoolError(f"{directory}: its storage files are not all .mcap or all .db3 files")
     kind = storage_kind(files[0])
     if any(storage_kind(p) != kind or sniff(p) != kind for p in files):
