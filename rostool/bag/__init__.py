@@ -8,5 +8,7 @@ Floors, each importing only those below it:
   `mcap_reindex`, `rosbag2_reindex`, `ros1_writer`, `record_sinks`, `mcap_batches`, `columnar`;
 - `formats`: the format table (facts, rosbags reader, info and reindex of each format);
 - what works on any bag through it: `open` (input detection), `reader`, `info`, `reindex`, `convert` (also
-  filter), `record`, `play`/`play_ros2`, `export`, `many` (several bags at once), `ray_engine`.
+  filter), `record`, `play`/`play_ros2`, `export`, `echo`, `many` (several bags at once), `ray_engine`, and
+  the verbs' engines over them (`copy_many`, `export_many`, `message_filter`, `play_topics`, `qos_overrides`,
+  `record_select`).
 """
