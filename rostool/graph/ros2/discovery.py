@@ -17,7 +17,6 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 from rostool.graph.ros2 import dds
-from rostool.graph.ros2_base.names import UNKNOWN_NODE as UNKNOWN_NODE
 from rostool.graph.ros2_base.names import from_dds_topic, from_dds_type
 
 DISCOVERY_TOPIC = "ros_discovery_info"

@@ -20,16 +20,12 @@ from typing import TYPE_CHECKING, Any
 
 from rostool.errors import RostoolError
 from rostool.graph.ros2.dds import POLICY_NAMES
-from rostool.graph.ros2.discovery import (
-    UNKNOWN_NODE,
-    Endpoint,
-    GraphCache,
-)
+from rostool.graph.ros2.discovery import Endpoint, GraphCache
 from rostool.graph.ros2.session import Session
 from rostool.graph.ros2.types import TypeSupport
 from rostool.graph.ros2_base.env import discovery_range
 from rostool.graph.ros2_base.graph import NodeEndpoints, Ros2Base
-from rostool.graph.ros2_base.names import request_topic, resolve, service_type, topic_to_dds
+from rostool.graph.ros2_base.names import UNKNOWN_NODE, request_topic, resolve, service_type, topic_to_dds
 from rostool.graph.ros2_base.subscription import DrainingSubscription
 from rostool.graph.ros2_base.transport import EndpointView, ServiceEndpoint
 from rostool.interfaces.ros2_types import distro_from_env
