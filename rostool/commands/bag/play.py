@@ -105,9 +105,16 @@ def play(
         skip_empty=skip_empty,
         pause_topics=[*topic_list(pause_topics), *extra_pause],
     )
-    pause_flags = (("--pause", pause), ("--pause-topics", bool(options.pause_topics)))
     request = PlayRequest(
-        paths, distro, options, hz or 40.0, quiet, "rosbag", True, pause_flags, "-s/-u and --topics"
+        bags=paths,
+        distro=distro,
+        options=options,
+        ros2_hz=hz or 40.0,
+        quiet=quiet,
+        form="rosbag",
+        keyboard=True,
+        pause_flags=(("--pause", pause), ("--pause-topics", bool(options.pause_topics))),
+        nothing_played_hint="-s/-u and --topics",
     )
     run_play(ctx, request)
 

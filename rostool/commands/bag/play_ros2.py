@@ -194,10 +194,15 @@ def play(ctx: click.Context, flags: PlayFlags) -> None:
         clock_topics=topic_list(flags.clock_topics),
         clock_topics_all=flags.clock_topics_all,
     )
-    pause_flags = (("-p/--start-paused", flags.start_paused),)
-    keyboard = not flags.disable_keyboard_controls
-    hint = "--start-offset and --topics"
     request = PlayRequest(
-        bags, flags.distro, options, hz, flags.quiet, "ros2 bag", keyboard, pause_flags, hint
+        bags=bags,
+        distro=flags.distro,
+        options=options,
+        ros2_hz=hz,
+        quiet=flags.quiet,
+        form="ros2 bag",
+        keyboard=not flags.disable_keyboard_controls,
+        pause_flags=(("-p/--start-paused", flags.start_paused),),
+        nothing_played_hint="--start-offset and --topics",
     )
     run_play(ctx, request)

@@ -114,10 +114,15 @@ def record(ctx: click.Context, flags: RecordFlags) -> None:
     )
     if flags.compression and options.fmt not in (None, "bag"):
         raise RostoolError("--lz4/--bz2 compress ROS 1 .bag chunks; leave them out with --format mcap/db3")
-    hidden = flags.include_hidden_topics
-    run_record(
-        ctx, RecordRequest(options, flags.qos, flags.interface_paths, hidden, flags.quiet, form="rosbag")
+    request = RecordRequest(
+        options=options,
+        qos=flags.qos,
+        interface_paths=flags.interface_paths,
+        include_hidden=flags.include_hidden_topics,
+        quiet=flags.quiet,
+        form="rosbag",
     )
+    run_record(ctx, request)
 
 
 def _parse_duration(text: str | None) -> float | None:
