@@ -141,7 +141,7 @@ BOOK_ERRORS: list[tuple[str, tuple[str, ...], str, str]] = [
 
 @pytest.fixture(scope="module")
 def reference() -> Reference:
-    return load_reference()
+    return load_reference(available_groups=live_command_groups(root))
 
 
 @pytest.fixture(scope="module")
@@ -520,13 +520,13 @@ def test_no_entry_references_a_missing_rostool_verb(reference: Reference) -> Non
     # (sets to None) a rostool form whose top-level group has no importable module in rostool.cli.COMMANDS
     # yet; for every group that does exist the check is strict: each subcommand named must resolve in the
     # live click tree. Words after the resolved verb are arguments and flags.
-    assert missing_rostool_verbs(reference) == []
+    assert missing_rostool_verbs(reference, root) == []
     shown = {entry.rostool.split()[1] for entry in reference.iter_entries() if entry.rostool}
-    assert shown <= live_command_groups()
+    assert shown <= live_command_groups(root)
 
 
 def test_flags_in_rostool_forms_exist_on_the_verbs_that_have_landed(reference: Reference) -> None:
-    assert unknown_rostool_flags(reference) == []
+    assert unknown_rostool_flags(reference, root) == []
 
 
 def test_rostool_forms_name_planned_verbs(reference: Reference) -> None:
@@ -657,15 +657,15 @@ def test_yaml_ros2_form_must_start_with_rostool_ros2(raw_data: dict[str, Any]) -
 
 
 def test_ros2_form_with_a_missing_flag_or_verb_is_rejected(raw_data: dict[str, Any]) -> None:
-    groups = live_command_groups()
+    groups = live_command_groups(root)
     bad_flag = "rostool --ros2 topic echo <topic> --qos-reliablity best_effort"
     data = _with_ros2_form(raw_data, "rostopic echo <topic>", bad_flag)
-    assert unknown_rostool_flags(build_reference(data, groups)) == [
+    assert unknown_rostool_flags(build_reference(data, groups), root) == [
         f"rostopic echo <topic>: '{bad_flag}' uses --qos-reliablity, which echo lacks"
     ]
 
     data = _with_ros2_form(raw_data, "rosparam get <name>", "rostool --ros2 param fetch <node> <name>")
-    assert missing_rostool_verbs(build_reference(data, groups)) == [
+    assert missing_rostool_verbs(build_reference(data, groups), root) == [
         "rosparam get <name>: 'rostool --ros2 param' has no subcommand 'fetch'"
     ]
     assert unplanned_rostool_verbs(build_reference(data, available_groups=())) == [
@@ -673,7 +673,7 @@ def test_ros2_form_with_a_missing_flag_or_verb_is_rejected(raw_data: dict[str, A
     ]
 
     data = _with_ros2_form(raw_data, "rosnode list", "rostool --ros2 node --all list")
-    assert missing_rostool_verbs(build_reference(data, groups)) == [
+    assert missing_rostool_verbs(build_reference(data, groups), root) == [
         "rosnode list: 'rostool --ros2 node' has no option --all"
     ]
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import sys
+from typing import cast
 
 import click
 
@@ -53,9 +54,11 @@ def cheatsheet(
     right command with a note.
     """
     from rostool.reference import default_reference, search
+    from rostool.reference.model import live_command_groups
     from rostool.reference.render import Block, print_table, render_json, render_markdown, render_text
 
-    reference = default_reference()
+    root = cast(click.Group, click.get_current_context().find_root().command)
+    reference = default_reference(live_command_groups(root))
     section_id = reference.section(section).id if section else None
     text = " ".join(query).strip()
     if ros2_column and not text:

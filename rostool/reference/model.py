@@ -10,6 +10,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
+import click
 import yaml
 
 from rostool.errors import RostoolError
@@ -139,25 +140,22 @@ def data_path() -> Path:
     return Path(str(resources.files("rostool") / "data" / "cheatsheet.yaml"))
 
 
-def live_command_groups() -> frozenset[str]:
-    """Top-level rostool verbs whose modules exist now (checked without importing them)."""
-    import click
-
-    from rostool.cli import root
-
+def live_command_groups(root: click.Group) -> frozenset[str]:
+    """Top-level rostool verbs (of the root group `root`) whose modules exist now (checked without
+    importing them)."""
     return frozenset(root.list_commands(click.Context(root, info_name="rostool")))
 
 
 @lru_cache(maxsize=1)
-def default_reference() -> Reference:
-    return load_reference()
+def default_reference(available_groups: frozenset[str]) -> Reference:
+    return load_reference(available_groups=available_groups)
 
 
-def load_reference(path: Path | None = None, *, available_groups: Collection[str] | None = None) -> Reference:
+def load_reference(path: Path | None = None, *, available_groups: Collection[str]) -> Reference:
     """Read, validate and build the reference.
 
-    `available_groups` are the top-level rostool verbs that exist (default: the live command tree);
-    rostool forms naming any other group are hidden, since that group has not landed yet.
+    `available_groups` are the top-level rostool verbs that exist (`live_command_groups(root)`); rostool
+    forms naming any other group are hidden, since that group has not landed yet.
     """
     source = path or data_path()
     try:
@@ -169,8 +167,7 @@ def load_reference(path: Path | None = None, *, available_groups: Collection[str
         raw = yaml.load(text, Loader=loader)
     except yaml.YAMLError as err:
         raise CheatsheetDataError(f"{source} is not valid YAML: {err}") from err
-    groups = live_command_groups() if available_groups is None else frozenset(available_groups)
-    return build_reference(raw, groups, origin=str(source))
+    return build_reference(raw, frozenset(available_groups), origin=str(source))
 
 
 def build_reference(raw: object, available_groups: Collection[str], origin: str = "cheatsheet") -> Reference:

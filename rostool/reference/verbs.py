@@ -61,30 +61,28 @@ def resolve(form: str, root: click.Command) -> Resolved:
     return Resolved(command, path, tuple(words))
 
 
-def missing_rostool_verbs(reference: Reference, root: click.Command | None = None) -> list[str]:
-    """Problems with the shown rostool forms, resolved against the live click tree.
+def missing_rostool_verbs(reference: Reference, root: click.Command) -> list[str]:
+    """Problems with the shown rostool forms, resolved against the click tree `root` (rostool's own).
 
     Each word after `rostool` must name a subcommand (or an option of the group) for as long as the
     current command is a group; once a leaf command is reached the remaining words are its arguments
     and flags.
     """
-    tree = _live_root() if root is None else root
     problems = []
     for entry in reference.iter_entries():
         for form in entry.rostool_forms:
-            problem = resolve(form, tree).problem
+            problem = resolve(form, root).problem
             if problem is not None:
                 problems.append(f"{entry.ros1}: {problem}")
     return problems
 
 
-def unknown_rostool_flags(reference: Reference, root: click.Command | None = None) -> list[str]:
+def unknown_rostool_flags(reference: Reference, root: click.Command) -> list[str]:
     """Flags in shown rostool forms that the resolved leaf command does not accept."""
-    tree = _live_root() if root is None else root
     problems = []
     for entry in reference.iter_entries():
         for form in entry.rostool_forms:
-            resolved = resolve(form, tree)
+            resolved = resolve(form, root)
             if resolved.problem is not None or isinstance(resolved.command, click.Group):
                 continue
             accepted, name = _options(resolved.command), resolved.command.name
@@ -112,9 +110,3 @@ def unplanned_rostool_verbs(reference: Reference) -> list[str]:
 
 def _options(command: click.Command) -> frozenset[str]:
     return frozenset(opt for param in command.params for opt in (*param.opts, *param.secondary_opts))
-
-
-def _live_root() -> click.Command:
-    from rostool.cli import root
-
-    return root
