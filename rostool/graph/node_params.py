@@ -16,11 +16,15 @@ def find_node(graph: Graph, node: str, include_hidden: bool, timeout: float) -> 
     resolved = graph.resolve(node)
     if hidden_name(resolved) and not include_hidden:
         raise RostoolError(f"Node not found: {resolved} is hidden (add --include-hidden-nodes)")
+    # the timeout counts from the first answer: a direct listing can itself take seconds to settle, and
+    # a listing that settled before the node was discovered must not be the last one asked
+    names = graph.node_names()
     deadline = time.monotonic() + timeout
-    while resolved not in graph.node_names():
+    while resolved not in names:
         if time.monotonic() >= deadline:
             raise RostoolError(f"Node not found: {resolved} (see `rostool node list`)")
         time.sleep(0.2)
+        names = graph.node_names()
     return resolved
 
 
