@@ -57,11 +57,14 @@ NODE_WAIT_SECONDS = 3.5  # a Fast DDS participant may answer a newcomer only at 
 
 def is_lifecycle_node(graph: Any, node: str, include_hidden: bool) -> bool:
     """Is `node` (absolute) a lifecycle node, as ros2lifecycle decides? A node not (or not fully) seen yet
-    is given NODE_WAIT_SECONDS to show up with its services."""
-    deadline = time.monotonic() + NODE_WAIT_SECONDS
+    is given NODE_WAIT_SECONDS, counted from the first listing's answer (a direct listing can take seconds
+    to settle, and one that settled before the node was discovered must not be the last one asked), to show
+    up with its services."""
+    deadline: float | None = None
     while True:
         if node in lifecycle_nodes(graph, include_hidden=True):
             return include_hidden or not hidden_name(f"{node.rstrip('/')}/get_state")
+        deadline = deadline or time.monotonic() + NODE_WAIT_SECONDS
         if time.monotonic() >= deadline:
             return False
         time.sleep(0.2)
