@@ -7,15 +7,13 @@ import socket
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
+from rostool.graph.ros1.env import MASTER_HOST as MASTER_HOST  # `rostool core`
+from rostool.graph.ros1.env import MASTER_PORT
+
 if TYPE_CHECKING:
     from rostool.graph.base import Graph
     from rostool.graph.daemon.client import DaemonClient
     from rostool.graph.ros1.master import Master
-
-DEFAULT_MASTER_URI = "http://localhost:11311"
-# where `rostool core` listens unless told (this machine only); graph/ros1/master.py's own defaults
-MASTER_PORT = 11311
-MASTER_HOST = "127.0.0.1"
 
 
 def select_ros_version(explicit: int | None) -> int:
@@ -27,7 +25,7 @@ def select_ros_version(explicit: int | None) -> int:
         return int(env_version)
     if os.environ.get("ROS_MASTER_URI"):
         return 1
-    if _port_answers("127.0.0.1", 11311):
+    if _port_answers("127.0.0.1", MASTER_PORT):
         return 1
     return 2
 
@@ -58,7 +56,9 @@ def open_graph(
     if version == 2:
 
         def direct() -> Graph:
-            return _ros2_graph(ros2_backend, node_name, interface_paths)
+            from rostool.graph.backends import open_ros2
+
+            return open_ros2(ros2_backend, node_name, interface_paths)[1]
 
         if not (use_daemon and daemon_allowed()):
             return direct()
@@ -68,12 +68,6 @@ def open_graph(
     from rostool.graph.ros1.graph import Ros1Graph
 
     return Ros1Graph(node_name, interface_paths)
-
-
-def _ros2_graph(backend: str | None, node_name: str, interface_paths: Sequence[str]) -> Graph:
-    from rostool.graph.backends import open_ros2
-
-    return open_ros2(backend, node_name, interface_paths)[1]
 
 
 def daemon_allowed() -> bool:

@@ -8,7 +8,9 @@ from urllib.parse import urlparse
 
 from rostool.errors import RostoolError
 
-DEFAULT_MASTER_URI = "http://localhost:11311"
+MASTER_PORT = 11311
+MASTER_HOST = "127.0.0.1"  # where rostool's embedded master listens unless told: this machine only
+DEFAULT_MASTER_URI = f"http://localhost:{MASTER_PORT}"
 
 
 def master_uri() -> str:

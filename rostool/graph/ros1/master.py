@@ -23,10 +23,9 @@ from typing import Any
 from xmlrpc.server import SimpleXMLRPCRequestHandler, SimpleXMLRPCServer
 
 from rostool.errors import RostoolError
+from rostool.graph.ros1.env import MASTER_HOST, MASTER_PORT
 from rostool.graph.ros1.master_api import MasterApi
 
-DEFAULT_PORT = 11311
-DEFAULT_HOST = "127.0.0.1"
 DEFAULT_DISTRO = "noetic"
 ROS_VERSION = "1.16.0"  # ros_comm version of the last ROS 1 release (Noetic)
 
@@ -109,7 +108,7 @@ def _bind_error(err: OSError, host: str, port: int) -> RostoolError:
 class Master:
     """A ROS 1 master with its parameter server, served over XML-RPC on `host:port`."""
 
-    def __init__(self, host: str = DEFAULT_HOST, port: int = DEFAULT_PORT, *, set_core_params: bool = True):
+    def __init__(self, host: str = MASTER_HOST, port: int = MASTER_PORT, *, set_core_params: bool = True):
         self.host = host
         self.port = port
         self.api = MasterApi()
