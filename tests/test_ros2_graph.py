@@ -157,7 +157,7 @@ def test_echo_follows_the_publishers_qos_as_they_change(env: dict[str, str]) -> 
 PUBLISH_BAG = r"""
 import json, sys, time
 from rostool.bag.reader import BagReader
-from rostool.graph.ros2.dds import QosRequest
+from rostool.graph.ros2_base.qos import QosRequest
 from rostool.graph.ros2.graph import Ros2Graph
 
 bag, wanted = sys.argv[1], json.loads(sys.argv[2])
@@ -183,7 +183,7 @@ graph.close()
 RECEIVE = r"""
 import json, sys, threading
 from rostool.bag.reader import BagReader
-from rostool.graph.ros2.dds import QosRequest
+from rostool.graph.ros2_base.qos import QosRequest
 from rostool.graph.ros2.graph import Ros2Graph
 
 bag, expected = sys.argv[1], json.loads(sys.argv[2])

@@ -28,7 +28,8 @@ SERVICE_TYPE = "type_description_interfaces/srv/GetTypeDescription"
 RAW_NODE = r"""
 import sys, time
 from cyclonedds._clayer import ddspy_write
-from rostool.graph.ros2 import dds, type_description
+from rostool.graph.ros2 import type_description
+from rostool.graph.ros2_base.qos import PROFILES
 from rostool.graph.ros2.graph import Ros2Graph
 from rostool.graph.ros2_base.names import topic_to_dds
 from rostool.interfaces.fill import build_message
@@ -36,7 +37,7 @@ from rostool.interfaces.fill import build_message
 graph = Ros2Graph("raw", anonymous=False, interface_paths=[sys.argv[1]])
 types = graph.types
 part = types.store_name("robo_msgs/msg/Part")
-writer = graph.session.writer(topic_to_dds("/raw"), part, dds.PROFILES["default"])
+writer = graph.session.writer(topic_to_dds("/raw"), part, PROFILES["default"])
 
 class Tampered(type_description.TypeDescriptionServer):
     def describe(self, type_name):

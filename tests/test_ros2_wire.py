@@ -8,7 +8,7 @@ from rosbags.typesys import Stores, get_typestore
 from rostool.errors import RostoolError
 from rostool.graph.ros2 import dds
 from rostool.graph.ros2.discovery import NodeEntry, decode_entities_info, encode_entities_info
-from rostool.graph.ros2_base import names
+from rostool.graph.ros2_base import env, names, qos
 
 GUID = bytes(range(1, 17))
 READER = bytes(range(16, 32))
@@ -72,8 +72,8 @@ def test_localhost_config_stays_on_loopback() -> None:
     assert "<MaxAutoParticipantIndex>32</MaxAutoParticipantIndex>" in config
     with_user = dds.cyclone_config({"CYCLONEDDS_URI": "file:///etc/cyclone.xml"})
     assert with_user.endswith(",file:///etc/cyclone.xml")  # appended, so the user's settings win
-    assert dds.discovery_range({"ROS_LOCALHOST_ONLY": "0"}) == "SUBNET"
-    assert dds.discovery_range({"ROS_LOCALHOST_ONLY": "1", "ROS_AUTOMATIC_DISCOVERY_RANGE": "SUBNET"}) == (
+    assert env.discovery_range({"ROS_LOCALHOST_ONLY": "0"}) == "SUBNET"
+    assert env.discovery_range({"ROS_LOCALHOST_ONLY": "1", "ROS_AUTOMATIC_DISCOVERY_RANGE": "SUBNET"}) == (
         "LOCALHOST"
     )
     subnet = dds.cyclone_config({"ROS_AUTOMATIC_DISCOVERY_RANGE": "SUBNET"})
@@ -84,19 +84,19 @@ def test_localhost_config_stays_on_loopback() -> None:
 @pytest.mark.parametrize("value", ["-1", "233", "x"])
 def test_domain_id_out_of_range(value: str) -> None:
     with pytest.raises(RostoolError, match="ROS_DOMAIN_ID"):
-        dds.domain_id({"ROS_DOMAIN_ID": value})
+        env.domain_id({"ROS_DOMAIN_ID": value})
 
 
 def test_qos_adaptation_follows_ros2cli() -> None:
-    reliable = dds.QosProfile("reliable", "transient_local", 1)
-    best_effort = dds.QosProfile("best_effort", "volatile", 5)
-    assert dds.adapt_to_publishers(dds.QosRequest(), [reliable])[0] == dds.QosProfile(
+    reliable = qos.QosProfile("reliable", "transient_local", 1)
+    best_effort = qos.QosProfile("best_effort", "volatile", 5)
+    assert qos.adapt_to_publishers(qos.QosRequest(), [reliable])[0] == qos.QosProfile(
         "reliable", "transient_local", 10
     )
-    mixed, notes = dds.adapt_to_publishers(dds.QosRequest(), [reliable, best_effort])
-    assert mixed == dds.QosProfile("best_effort", "volatile", 10) and len(notes) == 2
-    forced, _ = dds.adapt_to_publishers(dds.QosRequest(reliability="reliable", depth=3), [best_effort])
-    assert forced == dds.QosProfile("reliable", "volatile", 3)
+    mixed, notes = qos.adapt_to_publishers(qos.QosRequest(), [reliable, best_effort])
+    assert mixed == qos.QosProfile("best_effort", "volatile", 10) and len(notes) == 2
+    forced, _ = qos.adapt_to_publishers(qos.QosRequest(reliability="reliable", depth=3), [best_effort])
+    assert forced == qos.QosProfile("reliable", "volatile", 3)
 
 
 def test_our_serialized_messages_equal_real_ros2_bytes() -> None:

@@ -54,16 +54,8 @@ def open_live_graph(
     """The live graph the root options select; through the graph daemon unless the verb's `--no-daemon`."""
     from rostool.graph import open_graph
 
-    no_daemon = any(c.params.get("no_daemon") for c in _contexts(ctx))
-    return open_graph(
-        ros_version(ctx), node_name, interface_paths, ros2_backend(ctx), use_daemon=not no_daemon
-    )
-
-
-def _contexts(ctx: click.Context | None) -> Iterator[click.Context]:
-    while ctx is not None:
-        yield ctx
-        ctx = ctx.parent
+    use_daemon = not ctx.params.get("no_daemon")
+    return open_graph(ros_version(ctx), node_name, interface_paths, ros2_backend(ctx), use_daemon=use_daemon)
 
 
 @contextmanager

@@ -5,7 +5,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-# rmw's presets (rmw/qos_profiles.h) by ros2cli's short keys: the keys of rostool.graph.ros2.dds.PROFILES.
+# rmw's presets (rmw/qos_profiles.h) by ros2cli's short keys: the keys of
+# rostool.graph.ros2_base.qos.PROFILES.
 PROFILE_NAMES = (
     "default", "parameter_events", "parameters", "sensor_data", "services_default", "system_default"
 )  # fmt: skip

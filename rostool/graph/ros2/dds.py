@@ -19,16 +19,8 @@ from collections.abc import Mapping
 from typing import Any
 
 from rostool.errors import RostoolError
-from rostool.graph.ros2_base.env import DOMAIN_ID_MAX as DOMAIN_ID_MAX
-from rostool.graph.ros2_base.env import RANGES as RANGES
-from rostool.graph.ros2_base.env import discovery_range as discovery_range
-from rostool.graph.ros2_base.env import domain_id as domain_id
-from rostool.graph.ros2_base.env import static_peers as static_peers
-from rostool.graph.ros2_base.qos import PROFILES as PROFILES
-from rostool.graph.ros2_base.qos import QosProfile as QosProfile
-from rostool.graph.ros2_base.qos import QosRequest as QosRequest
-from rostool.graph.ros2_base.qos import adapt_to_publishers as adapt_to_publishers
-from rostool.graph.ros2_base.qos import serves as serves
+from rostool.graph.ros2_base.env import discovery_range, domain_id, static_peers
+from rostool.graph.ros2_base.qos import QosProfile
 
 MAX_PARTICIPANTS_PER_HOST = 32
 

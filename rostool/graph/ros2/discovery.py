@@ -18,6 +18,7 @@ from typing import Any
 
 from rostool.graph.ros2 import dds
 from rostool.graph.ros2_base.names import from_dds_topic, from_dds_type
+from rostool.graph.ros2_base.qos import QosProfile
 
 DISCOVERY_TOPIC = "ros_discovery_info"
 DISCOVERY_TYPE = "rmw_dds_common/msg/ParticipantEntitiesInfo"
@@ -31,7 +32,7 @@ class Endpoint:
     participant: bytes
     dds_topic: str
     dds_type: str
-    qos: dds.QosProfile
+    qos: QosProfile
     user_data: bytes
     is_writer: bool
 

@@ -19,6 +19,7 @@ from rostool.graph.ros2.discovery import (
 )
 from rostool.graph.ros2.types import TypeSupport, gid_size
 from rostool.graph.ros2_base.names import type_to_dds
+from rostool.graph.ros2_base.qos import QosProfile
 
 
 class Session:
@@ -39,9 +40,9 @@ class Session:
         info_cls = types.idl_class(DISCOVERY_TYPE)
         info_topic: Any = Topic(self.participant.dp, DISCOVERY_TOPIC, info_cls)
         user_data = types.user_data(DISCOVERY_TYPE)
-        graph_qos = dds.QosProfile("reliable", "transient_local", 1)
+        graph_qos = QosProfile("reliable", "transient_local", 1)
         writer_qos = dds.to_dds_qos(graph_qos, user_data)
-        reader_qos = dds.to_dds_qos(dds.QosProfile("reliable", "transient_local", 0), user_data)
+        reader_qos = dds.to_dds_qos(QosProfile("reliable", "transient_local", 0), user_data)
         self._info_writer = DataWriter(self.participant.dp, info_topic, qos=writer_qos)
         self._info_reader = DataReader(
             self.participant.dp, info_topic, qos=Qos(*reader_qos.policies, Policy.IgnoreLocal.Participant)
@@ -75,14 +76,14 @@ class Session:
             return created
 
     def writer(
-        self, dds_name: str, store_name: str, profile: dds.QosProfile, request_header: bool = False
+        self, dds_name: str, store_name: str, profile: QosProfile, request_header: bool = False
     ) -> Any:
         from cyclonedds.pub import DataWriter
 
         return self._announced(DataWriter, self.node.writers, dds_name, store_name, profile, request_header)
 
     def reader(
-        self, dds_name: str, store_name: str, profile: dds.QosProfile, request_header: bool = False
+        self, dds_name: str, store_name: str, profile: QosProfile, request_header: bool = False
     ) -> Any:
         from cyclonedds.sub import DataReader
 
@@ -94,7 +95,7 @@ class Session:
         announced: list[bytes],
         dds_name: str,
         store_name: str,
-        profile: dds.QosProfile,
+        profile: QosProfile,
         request_header: bool,
     ) -> Any:
         """A DDS reader or writer with the type hash in USER_DATA, listed on ros_discovery_info."""
