@@ -46,6 +46,17 @@ def _ros2_frequencies(bag: BagInput, info: BagInfo) -> None:
         topic.frequency = median_rate(sorted(stamps.get(topic.name, [])))
 
 
+SORT_KEYS = ("name", "type", "count")  # rosbag2's `ros2 bag info --sort` methods, each ascending
+
+
+def sort_topics(info: BagInfo, by: str) -> None:
+    """Order the topics as `ros2 bag info --sort BY` does: ascending by name, type or message count (a
+    stable sort: ties keep the bag's order)."""
+    if by not in SORT_KEYS:
+        raise RostoolError(f"--sort {by}: choose one of {', '.join(SORT_KEYS)}")
+    info.topics.sort(key=lambda t: getattr(t, by))
+
+
 # -- rendering -----------------------------------------------------------------------------------
 def _percent(part: int, whole: int) -> str:
     """rosbag's compression ratio; a damaged chunk header may declare 0 bytes uncompressed."""
@@ -87,7 +98,9 @@ def _duration(duration: float) -> str:
     return f"{duration:.1f}s"
 
 
-def format_text(info: BagInfo, verbose: bool = False, topic_name: bool = False) -> str:
+def format_text(
+    info: BagInfo, verbose: bool = False, topic_name: bool = False, sort: str | None = None
+) -> str:
     """Human output laid out as the bag's own tool prints it: `rosbag info` for ROS 1 bags, `ros2 bag
     info` for rosbag2 directories, .mcap and .db3 files (see `rosbag2_info.format_ros2`).
 
@@ -99,7 +112,7 @@ def format_text(info: BagInfo, verbose: bool = False, topic_name: bool = False) 
         return rosbag2_info.topic_names(info)
     if info.ros_version == 2:
         counts = rosbag2_info.count_service_events(info.path, info) if verbose else None
-        return rosbag2_info.format_ros2(info, verbose, counts)
+        return rosbag2_info.format_ros2(info, verbose, counts, sort)
     return format_rosbag(info)
 
 

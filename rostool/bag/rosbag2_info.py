@@ -76,9 +76,13 @@ def _lines(first_label: str, items: Iterable[str], indent: str) -> list[str]:
 
 
 def format_ros2(
-    info: BagInfo, verbose: bool = False, service_counts: dict[str, ServiceCounts] | None = None
+    info: BagInfo,
+    verbose: bool = False,
+    service_counts: dict[str, ServiceCounts] | None = None,
+    sort: str | None = None,
 ) -> str:
-    """The text `ros2 bag info BAG` prints (`verbose`: with request/response counts per service)."""
+    """The text `ros2 bag info BAG` prints (`verbose`: with request/response counts per service; topics come
+    in `info`'s order, see `info.sort_topics`)."""
     start = info.start_ns or 0
     duration = (info.end_ns or start) - start
     topics = _topics(info)
@@ -104,6 +108,9 @@ def format_ros2(
         INDENT,
     )
     lines.append(f"Service:           {len(services)}")
+    if verbose and sort == "count":  # rosbag2 sorts services by requests + responses when it counts them
+        counted = service_counts or {}
+        services.sort(key=lambda s: (c := counted.get(s.name, ServiceCounts())).requests + c.responses)
     rows = []
     for service in services:
         name = service.name[: -len(SERVICE_EVENT_SUFFIX)]

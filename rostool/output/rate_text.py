@@ -3,7 +3,7 @@ ROS 2, or one JSON object per topic and report."""
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Literal, Protocol
 
 from rostool.output.json_text import dumps
@@ -71,15 +71,46 @@ def bandwidth_text(rate: float, s: Stats, style: Literal["ros1", "ros2"]) -> str
             f"average: {format_bytes(rate)}/s\n\tmean: {format_bytes(s.mean)} min: "
             f"{format_bytes(s.minimum)} max: {format_bytes(s.maximum)} window: {s.count}"
         )
-    scale, unit, digits = (1, "B", 0) if rate < 1000 else (1e3, "KB", 2) if rate < 1e6 else (1e6, "MB", 2)
-
-    def show(value: float) -> str:
-        return f"{value / scale:.{digits}f} {unit}"
-
+    show = _ros2_unit(rate)
     return (
         f"{show(rate)}/s from {s.count} messages\n"
         f"\tMessage size mean: {show(s.mean)} min: {show(s.minimum)} max: {show(s.maximum)}"
     )
+
+
+BandwidthRow = tuple[str, float, Stats]  # topic, bytes per second, message size statistics
+
+
+def bandwidth_report(
+    rows: Sequence[BandwidthRow], several: bool, as_json: bool, style: Literal["ros1", "ros2"]
+) -> list[str]:
+    """One report's texts: one topic's lines (`bandwidth_text`), or a line per topic under a header."""
+    if as_json:
+        return [
+            dumps({"topic": topic, "bandwidth": rate, "mean": s.mean, "min": s.minimum, "max": s.maximum,
+                   "window": s.count})
+            for topic, rate, s in rows
+        ]  # fmt: skip
+    if not rows:
+        return []
+    if not several:
+        _topic, rate, s = rows[0]
+        return [bandwidth_text(rate, s, style)]
+    header = ("topic", "bandwidth", "mean", "min", "max", "window")
+    cells = [header]
+    for topic, rate, s in rows:
+        show = format_bytes if style == "ros1" else _ros2_unit(rate)
+        cells.append((topic, f"{show(rate)}/s", show(s.mean), show(s.minimum), show(s.maximum), str(s.count)))
+    widths = [max(len(row[i]) for row in cells) for i in range(len(header))]
+    lines = ["   ".join(cell.ljust(w) for cell, w in zip(row, widths, strict=True)).rstrip() for row in cells]
+    lines.insert(1, "=" * max(len(line) for line in lines))
+    return ["\n".join(lines)]
+
+
+def _ros2_unit(rate: float) -> Callable[[float], str]:
+    """ros2 topic bw's one unit for a topic's four numbers, chosen by its rate."""
+    scale, unit, digits = (1, "B", 0) if rate < 1000 else (1e3, "KB", 2) if rate < 1e6 else (1e6, "MB", 2)
+    return lambda value: f"{value / scale:.{digits}f} {unit}"
 
 
 def format_bytes(value: float) -> str:

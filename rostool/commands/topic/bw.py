@@ -1,4 +1,4 @@
-"""`rostool topic bw`: the bandwidth a topic uses (rostopic bw's lines, ros2 topic bw's)."""
+"""`rostool topic bw`: bandwidth of topics (rostopic bw's lines, ros2 topic bw's; a table for several)."""
 
 from __future__ import annotations
 
@@ -8,36 +8,58 @@ import click
 
 from rostool.commands._common import ignored_ros2_options, live_graph
 from rostool.commands._qos import qos_options
+from rostool.commands.topic._several import all_topics_option, chosen_topics
 from rostool.graph.qos import QosRequest
 
 
 @click.command("bw")
-@click.argument("name")
+@click.argument("names", nargs=-1, metavar="TOPIC...")
+@all_topics_option
 @click.option(
     "-w", "--window", type=click.IntRange(min=2), default=100, show_default=True, help="Messages averaged."
 )
+@click.option("--json", "as_json", is_flag=True, help="One JSON object per topic and report.")
 @click.option("--duration", type=click.FloatRange(min=0, min_open=True), help="Stop after S seconds.")
 @ignored_ros2_options("no_daemon", "spin_time", "use_sim_time")
 @click.pass_context
 @qos_options
-def bw(ctx: click.Context, name: str, window: int, duration: float | None, qos: QosRequest) -> None:
-    """Measure the bandwidth a topic uses (bytes of serialized messages per second).
+def bw(
+    ctx: click.Context, names: tuple[str, ...], all_topics: bool, window: int, as_json: bool,
+    duration: float | None, qos: QosRequest,
+) -> None:  # fmt: skip
+    """Measure the bandwidth topics use (bytes of serialized messages per second).
+
+    One topic prints rostopic bw's (ros2 topic bw's) lines; several print a line per topic each second.
 
     \b
-    Example:
+    Examples:
       rostool topic bw /camera/image_raw
+      rostool topic bw /scan /odom
+      rostool topic bw --all --duration 5
     """
     from rostool.graph.rates import SizeMeter
-    from rostool.output.rate_text import bandwidth_text
+    from rostool.output.rate_text import bandwidth_report
 
-    meter = SizeMeter(window)
     with live_graph(ctx) as graph:
         graph.use_qos(qos)
-        graph.subscribe(name, lambda r: meter.arrived(time.monotonic(), len(r.payload)))
-        click.echo(f"{'Subscribed' if graph.style == 'ros2' else 'subscribed'} to [{name}]")
+        ros2 = graph.style == "ros2"
+        meters = {topic: SizeMeter(window) for topic in chosen_topics(graph, names, all_topics)}
+        for topic_name, meter in meters.items():
+            if len(meters) > 1 and graph.topic_type(topic_name) is None:
+                click.echo(f"WARNING: topic [{topic_name}] does not appear to be published yet", err=True)
+            graph.subscribe(
+                topic_name,
+                lambda r, meter=meter: meter.arrived(time.monotonic(), len(r.payload)),
+                lambda e: click.echo(f"rostool: {e}", err=True),
+            )
+            if not as_json:
+                click.echo(f"{'Subscribed' if ros2 else 'subscribed'} to [{topic_name}]")
         started = time.monotonic()
+        next_report = started + 1.0
         while duration is None or time.monotonic() - started < duration:
-            time.sleep(1.0)
-            result = meter.bandwidth(time.monotonic())
-            if result is not None:
-                click.echo(bandwidth_text(*result, graph.style))
+            time.sleep(max(0.0, min(next_report, started + (duration or 1e12)) - time.monotonic()))
+            next_report += 1.0
+            now = time.monotonic()
+            rows = [(t, *result) for t, m in meters.items() if (result := m.bandwidth(now)) is not None]
+            for text in bandwidth_report(rows, len(meters) > 1, as_json, graph.style):
+                click.echo(text)

@@ -10,12 +10,14 @@ import click
 
 from rostool.commands._common import ignored_ros2_options, live_graph
 from rostool.commands._qos import qos_options
+from rostool.commands.topic._several import all_topics_option, chosen_topics
 from rostool.graph.base import Received
 from rostool.graph.qos import QosRequest
 
 
 @click.command("hz")
-@click.argument("names", nargs=-1, required=True, metavar="TOPIC...")
+@click.argument("names", nargs=-1, metavar="TOPIC...")
+@all_topics_option
 @click.option("-w", "--window", type=click.IntRange(min=2), help="Average over the last N messages only.")
 @click.option("--json", "as_json", is_flag=True, help="One JSON object per topic and report.")
 @click.option("--duration", type=click.FloatRange(min=0, min_open=True), help="Stop after S seconds.")
@@ -26,6 +28,7 @@ from rostool.graph.qos import QosRequest
 def hz(
     ctx: click.Context,
     names: tuple[str, ...],
+    all_topics: bool,
     window: int | None,
     as_json: bool,
     duration: float | None,
@@ -38,6 +41,7 @@ def hz(
     Examples:
       rostool topic hz /hello_world
       rostool topic hz /scan /odom -w 100
+      rostool topic hz --all --duration 5      # every published topic, a line each
     """
     from rostool.graph.rates import RateMeter, fresh_rates
     from rostool.output.filter_expr import compile_filter
@@ -47,7 +51,7 @@ def hz(
     with live_graph(ctx) as graph:
         graph.use_qos(qos)
         ros2 = graph.style == "ros2"
-        meters = {graph.resolve(n): RateMeter(window) for n in names}
+        meters = {topic: RateMeter(window) for topic in chosen_topics(graph, names, all_topics)}
         for topic_name, meter in meters.items():
             if graph.topic_type(topic_name) is None:
                 click.echo(f"WARNING: topic [{topic_name}] does not appear to be published yet", err=True)
