@@ -68,6 +68,7 @@ class PlayOptions:
     until: float | None = None  # bag time (seconds since the epoch) where playing ends
     clock_topics: Sequence[str] = ()  # bag topics whose messages' times are also published on /clock
     clock_topics_all: bool = False  # every message's time is published on /clock
+    max_messages: int | None = None  # bag burst: stop after this many messages (None: all)
 
 
 @dataclass
@@ -326,7 +327,10 @@ class Player:
         published = 0
         clock_pub = self._clock_pub
         wait = self._wait
+        limit = self.options.max_messages
         for plan, stamp, payload in self._messages():
+            if limit is not None and self.result.published + published >= limit:
+                break
             if published == 0:
                 now = time.perf_counter()
                 self.clock.start(stamp, now)

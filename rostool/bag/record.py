@@ -57,11 +57,12 @@ class _Queue:
         self.lock = threading.Lock()
         self.ready = threading.Event()
         self.accepting = True
+        self.paused = False  # messages arriving while paused are not recorded (nor counted as dropped)
         self.clock: Callable[[], int | None] | None = None  # --use-sim-time: the latest /clock, if any
 
     def put(self, topic: str, payload: bytes, origin: Any) -> None:
         now = time.time_ns() if self.clock is None else self.clock()
-        if not self.accepting or now is None:
+        if not self.accepting or self.paused or now is None:
             return
         size = len(payload)
         with self.lock:
@@ -100,6 +101,7 @@ class Recorder:
         self.patterns = [_compile(p) for p in options.topics] if options.regex else []
         self.exclude = _compile(options.exclude) if options.exclude else None
         self.queue = _Queue(options.buffer_bytes)
+        self.queue.paused = options.start_paused
         self.result = RecordResult()
         self._subscribed: set[str] = set()
         self._split_index = 0 if options.split else None
@@ -277,6 +279,15 @@ class Recorder:
             self._stop.set()
 
     # -- main ------------------------------------------------------------------------------------
+    @property
+    def paused(self) -> bool:
+        return self.queue.paused
+
+    def toggle_paused(self) -> bool:
+        """Pause or resume taking messages (space, SIGUSR1); the new state."""
+        self.queue.paused = not self.queue.paused
+        return self.queue.paused
+
     def status(self) -> RecordStatus:
         sink = self._sink
         return RecordStatus(
@@ -285,6 +296,7 @@ class Recorder:
             bytes=sink.size if sink is not None else 0,
             topics=len(self.result.counts),
             dropped=sum(self.queue.dropped.values()),
+            paused=self.queue.paused,
         )
 
     def run(

@@ -42,6 +42,7 @@ class RecordOptions:
     rosbag2: Rosbag2Layout | None = None
     wanted: Callable[[str], bool] | None = None  # replaces -a/-e/-x matching when given
     use_sim_time: bool = False  # stamp with the latest /clock; nothing is written before the first one
+    start_paused: bool = False  # take no message until resumed (ros2 bag record --start-paused)
 
 
 @dataclass
@@ -51,6 +52,7 @@ class RecordStatus:
     bytes: int
     topics: int
     dropped: int
+    paused: bool = False
 
 
 @dataclass

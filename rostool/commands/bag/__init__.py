@@ -1,4 +1,4 @@
-"""`rostool bag`: info, echo, convert, filter, reindex, play, record, export, plot, graph over .bag,
+"""`rostool bag`: info, echo, convert, filter, reindex, play, burst, record, export, plot, graph over .bag,
 rosbag2 directories, .mcap and .db3; each verb in its own module, imported only when used.
 
 Under ROS 2 (--ros2, ROS_VERSION=2) `record` and `play` take ros2 bag's flags (`record_ros2`, `play_ros2`):
@@ -15,7 +15,7 @@ CONTEXT = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
 _VERBS = {
     "info": "info:info", "echo": "echo:echo", "convert": "convert:convert", "filter": "filter:filter_",
     "reindex": "reindex:reindex", "play": "play:play", "record": "record:record", "export": "export:export",
-    "plot": "plot:plot", "graph": "graph:graph",
+    "plot": "plot:plot", "graph": "graph:graph", "burst": "burst:burst",
 }  # fmt: skip
 _ROS2_FORMS = {"record": "record_ros2:record", "play": "play_ros2:play"}
 

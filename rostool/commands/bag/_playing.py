@@ -11,7 +11,7 @@ from typing import Literal
 
 import click
 
-from rostool.bag.play import PlayOptions
+from rostool.bag.play import PlayOptions, PlayResult
 from rostool.commands.bag._options import warner
 from rostool.errors import RostoolError
 
@@ -31,7 +31,7 @@ class PlayRequest:
     nothing_played_hint: str  # which flags to check when no message was played
 
 
-def run_play(ctx: click.Context, request: PlayRequest) -> None:
+def run_play(ctx: click.Context, request: PlayRequest) -> PlayResult:
     from rostool.bag.play import Player
     from rostool.bag.play_console import Console
     from rostool.bag.play_ros2 import Ros2Player
@@ -67,3 +67,4 @@ def run_play(ctx: click.Context, request: PlayRequest) -> None:
     if result.published == 0 and not request.quiet:
         warn(f"no message was played (check {request.nothing_played_hint})")
     sys.stdout.flush()
+    return result

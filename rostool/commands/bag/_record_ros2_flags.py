@@ -13,7 +13,7 @@ from rostool.errors import RostoolError
 from rostool.graph.qos import QosRequest
 
 UNSUPPORTED = (
-    "start_paused", "snapshot_mode", "ignore_leaf_topics", "static_topics_path", "storage_preset_profile",
+    "snapshot_mode", "ignore_leaf_topics", "static_topics_path", "storage_preset_profile",
     "storage_config_file",
 )  # fmt: skip
 

@@ -4,6 +4,7 @@ parse into a `RecordRequest`; `run_record` records it from the live graph and re
 from __future__ import annotations
 
 import dataclasses
+import os
 import sys
 import threading
 from collections.abc import Callable
@@ -12,7 +13,7 @@ from typing import Literal
 
 import click
 
-from rostool.bag.record_options import RecordOptions, RecordResult, RecordStatus
+from rostool.bag.record_options import RecordOptions, RecordResult
 from rostool.bag.record_select import TopicSelector
 from rostool.errors import RostoolError
 from rostool.graph.qos import QosRequest
@@ -30,14 +31,16 @@ class RecordRequest:
     form: Literal["rosbag", "ros2 bag"]  # whose messages: rosbag's progress line or ros2 bag's log lines
     selector: TopicSelector | None = None  # ros2 bag record's rules (they ask the graph for types)
     no_discovery: bool = False  # only the topics present at the start
+    keyboard: bool = True  # space pauses and resumes when stdin is a terminal
 
 
 def run_record(ctx: click.Context, request: RecordRequest) -> None:
     from rostool.bag.record import Recorder, stop_on_signals
     from rostool.commands._common import live_graph
+    from rostool.commands.bag._record_console import RecordProgress, pause_controls
 
     ros2_form = request.form == "ros2 bag"
-    progress = None if request.quiet or ros2_form or not sys.stderr.isatty() else _RecordProgress()
+    progress = None if request.quiet or ros2_form or not sys.stderr.isatty() else RecordProgress()
     stop = threading.Event()
     with live_graph(ctx, request.interface_paths) as graph:
         graph.use_qos(request.qos)
@@ -59,13 +62,34 @@ def run_record(ctx: click.Context, request: RecordRequest) -> None:
         if ros2_form and not request.quiet and sys.stderr.isatty():  # piped: only warnings and the summary
             click.echo("[INFO] [rosbag2_recorder]: Listening for topics...", err=True)
             click.echo("[INFO] [rosbag2_recorder]: Recording...", err=True)
-        with stop_on_signals(stop):
+
+        def toggle() -> None:
+            paused = recorder.toggle_paused()
+            if progress is not None:
+                progress.end()
+            if not request.quiet:
+                word = "Pausing" if paused else "Resuming"
+                click.echo(f"[INFO] [rosbag2_recorder]: {word} recording." if ros2_form else
+                           f"rostool: {word.lower()} recording", err=True)  # fmt: skip
+
+        with stop_on_signals(stop), pause_controls(toggle, request.keyboard) as keys:
+            if not request.quiet and (keys or recorder.paused):
+                click.echo(_pause_hint(keys, recorder.paused, ros2_form), err=True)
             try:
                 result = recorder.run(stop, progress)
             finally:
                 if progress is not None:
                     progress.end()
     _report(result, request, warn)
+
+
+def _pause_hint(keys: bool, paused: bool, ros2_form: bool) -> str:
+    """How to pause and resume (rosbag2's line under the ROS 2 form); SIGUSR1 where no keys are read."""
+    how = "SPACE" if keys else f"SIGUSR1 (kill -USR1 {os.getpid()})"
+    state = " Recording is paused." if paused else ""
+    if ros2_form:
+        return f"[INFO] [rosbag2_recorder]: Press {how} for pausing/resuming.{state}"
+    return f"rostool: {how} pauses and resumes recording.{state}"
 
 
 def _report(result: RecordResult, request: RecordRequest, warn: Callable[[str], None]) -> None:
@@ -88,29 +112,3 @@ def _report(result: RecordResult, request: RecordRequest, warn: Callable[[str], 
         + (f" (--max-splits removed {len(result.removed)} older files)" if removed else ""),
         err=True,
     )
-
-
-class _RecordProgress:
-    """One status line on stderr, rewritten in place."""
-
-    def __init__(self) -> None:
-        self._last = 0.0
-        self._shown = False
-
-    def __call__(self, status: RecordStatus) -> None:
-        from rostool.graph.rates import format_bytes
-
-        dropped = f", {status.dropped} dropped" if status.dropped else ""
-        sys.stderr.write(
-            f"\r recording {status.path}: {status.messages} msgs on {status.topics} "
-            f"topic{'' if status.topics == 1 else 's'}, "
-            f"{format_bytes(status.bytes)}{dropped}    "
-        )
-        sys.stderr.flush()
-        self._shown = True
-
-    def end(self) -> None:
-        if self._shown:
-            sys.stderr.write("\n")
-            sys.stderr.flush()
-            self._shown = False

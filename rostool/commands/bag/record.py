@@ -35,6 +35,7 @@ class RecordFlags:
     quiet: bool
     force: bool
     include_hidden_topics: bool
+    start_paused: bool
     interface_paths: tuple[str, ...]
     qos: QosRequest
 
@@ -64,6 +65,8 @@ class RecordFlags:
 @click.option("-q", "--quiet", is_flag=True, help="No progress and no summary on stderr.")
 @click.option("--force", is_flag=True, help="Replace an existing output bag (nothing else).")
 @click.option("--include-hidden-topics", is_flag=True, help="ROS 2: -a/-e also record hidden topics (/_x).")
+@click.option("--start-paused", is_flag=True,
+              help="Start paused: nothing is recorded until space (or SIGUSR1) resumes.")  # fmt: skip
 @interfaces_option
 @qos_options
 @parsed_into(RecordFlags)
@@ -74,7 +77,8 @@ def record(ctx: click.Context, flags: RecordFlags) -> None:
     The bag is written as NAME.bag.active and renamed when recording ends; Ctrl+C and SIGTERM always
     leave a complete, indexed bag (exit 0). After a crash or `kill -9`, `rostool bag reindex
     NAME.bag.active` recovers all but the last 0.1 s. .mcap/.db3 outputs are ROS 2 bags (types
-    converted to pkg/msg/T). With -a or -e, topics that appear later are recorded too.
+    converted to pkg/msg/T). With -a or -e, topics that appear later are recorded too. On a terminal,
+    space pauses and resumes (SIGUSR1 too).
 
     These are rosbag record's flags (ROS 1); under ROS 2 (--ros2, ROS_VERSION=2) `bag record` takes ros2
     bag record's and writes a rosbag2 directory (see `rostool --ros2 bag record -h`).
@@ -111,6 +115,7 @@ def record(ctx: click.Context, flags: RecordFlags) -> None:
         compression=flags.compression or "none",
         node=flags.node,
         force=flags.force,
+        start_paused=flags.start_paused,
     )
     if flags.compression and options.fmt not in (None, "bag"):
         raise RostoolError("--lz4/--bz2 compress ROS 1 .bag chunks; leave them out with --format mcap/db3")

@@ -86,7 +86,7 @@ RECORD_LISTS = (
     "--custom-data", multiple=True, metavar="KEY=VALUE...", help="Store KEY=VALUE in metadata.yaml."
 )
 @click.option(
-    "--disable-keyboard-controls", is_flag=True, help="Accepted (no keys are read while recording)."
+    "--disable-keyboard-controls", is_flag=True, help="Read no keys (SPACE pauses/resumes otherwise)."
 )
 @click.option("--log-level", type=click.Choice(["debug", "info", "warn", "error", "fatal"]), default="info",
               help="Accepted for ros2 bag's sake.")  # fmt: skip
@@ -100,7 +100,8 @@ RECORD_LISTS = (
 @click.option("--compression-threads", type=click.IntRange(min=0), default=0, help="Accepted.")
 @click.option("--compression-threads-priority", type=int, default=0, help="Accepted.")
 @click.option("--max-cache-duration", type=click.IntRange(min=0), default=0, help="Accepted.")
-@click.option("--start-paused", is_flag=True, help="Not supported yet (refused in one line).")
+@click.option("--start-paused", is_flag=True,
+              help="Start paused: nothing is recorded until SPACE (or SIGUSR1) resumes.")  # fmt: skip
 @click.option("--snapshot-mode", is_flag=True, help="Not supported yet (refused in one line).")
 @click.option("--ignore-leaf-topics", is_flag=True, help="Not supported yet (refused in one line).")
 @click.option("--static-topics-path", metavar="FILE", help="Not supported yet (refused in one line).")
@@ -115,7 +116,7 @@ def record(ctx: click.Context, flags: RecordFlags) -> None:
     Writes a rosbag2 directory (metadata.yaml and NAME_0.mcap, NAME_1.mcap, ...) that ros2 bag, rosbags
     and every rostool bag verb read. Messages are stored as received (CDR) with the publisher's QoS and
     the receive time. With -a/--all-topics/-e/--topic-types, topics that appear later are recorded too.
-    Ctrl+C and SIGTERM leave a complete bag (exit 0).
+    Ctrl+C and SIGTERM leave a complete bag (exit 0). SPACE on a terminal (or SIGUSR1) pauses and resumes.
 
     \b
     Examples:
@@ -124,6 +125,7 @@ def record(ctx: click.Context, flags: RecordFlags) -> None:
       rostool --ros2 bag record -e '/camera/.*' -x compressed -b 1000000000 --max-bag-files 5
       rostool --ros2 bag record -a -d 60 --compression-mode file --compression-format zstd
       rostool --ros2 bag record /chatter -o chatter.mcap  # one .mcap file, no directory
+      rostool --ros2 bag record -a --start-paused         # SPACE starts recording
     """
     from rostool.bag.qos_overrides import qos_overrides
     from rostool.bag.record_options import RecordOptions
@@ -171,6 +173,7 @@ def record(ctx: click.Context, flags: RecordFlags) -> None:
         rosbag2=layout,
         wanted=selector,
         use_sim_time=flags.use_sim_time,
+        start_paused=flags.start_paused,
     )
     request = RecordRequest(
         options=options,
@@ -181,5 +184,6 @@ def record(ctx: click.Context, flags: RecordFlags) -> None:
         form="ros2 bag",
         selector=selector,
         no_discovery=flags.no_discovery,
+        keyboard=not flags.disable_keyboard_controls,
     )
     run_record(ctx, request)
