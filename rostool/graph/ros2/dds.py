@@ -57,6 +57,9 @@ def cyclone_config(env: Mapping[str, str] = os.environ) -> str:
     # Fast DDS 3 (Kilted) announces type objects with try_construct 0, which Cyclone rejects as invalid
     # and then never matches those endpoints (ros_discovery_info, services, actions); accept them
     body += "<Compatibility><AllowInvalidTryConstruct>true</AllowInvalidTryConstruct></Compatibility>"
+    # Fast DDS honours a discovery disposal (a reader, writer or participant deleted) only when it carries
+    # the key hash; without it an exited rostool's endpoints stay in ROS 2 tools' view until its lease ends
+    body += "<Internal><GenerateKeyhash>true</GenerateKeyhash></Internal>"
     parts = [f'<CycloneDDS><Domain Id="any">{body}</Domain></CycloneDDS>']
     user = env.get("CYCLONEDDS_URI", "").strip()
     if user:
