@@ -31,7 +31,7 @@ from typing import Any, Protocol
 
 from rosbags.interfaces import Connection, ConnectionExtRosbag1, ConnectionExtRosbag2
 
-from rostool.bag.play_console import Console
+from rostool.bag.play_console import Console, split_keys
 from rostool.bag.reader import BagReader
 from rostool.bag.schedule import PlayClock, sleep_until
 from rostool.errors import RostoolError
@@ -40,6 +40,9 @@ from rostool.interfaces.names import to_ros1_name
 from rostool.interfaces.ros1 import Ros1Type, builtin_store
 
 _CLOCK = struct.Struct("<II")
+# rosbag2's key help, as `ros2 bag play` logs it ('s' and 't' work too)
+ROS2_KEYS = (("SPACE", "Pause/Resume"), ("CURSOR_RIGHT", "Play Next Message"),
+             ("CURSOR_UP", "Increase Rate 10%"), ("CURSOR_DOWN", "Decrease Rate 10%"))  # fmt: skip
 UI_INTERVAL = 0.05  # keyboard polling and status line refresh, seconds
 
 
@@ -300,7 +303,13 @@ class Player:
             for publisher, _md5 in self._publishers.values():
                 while not publisher.wait_for_subscribers(1, 0.1):
                     pass
-        self.console.say("Hit space to toggle paused, or 's' to step." if self.console.keyboard else "")
+        if not self.console.keyboard:
+            self.console.say("")
+        elif self.console.form == "ros2 bag":
+            for key, action in ROS2_KEYS:
+                self.console.say(f"[INFO] [rosbag2_player]: Press {key} for {action}")
+        else:
+            self.console.say("Hit space to toggle paused, or 's' to step.")
 
     def _messages(self) -> Iterator[tuple[_Plan, int, Any]]:
         start, end = self.window
@@ -389,17 +398,22 @@ class Player:
     def _ui(self, now: float) -> None:
         self._next_ui = now + UI_INTERVAL
         console = self.console
-        for key in console.read_keys():
+        for key in split_keys(console.read_keys()):
             if key == " ":
                 if self.clock.paused:
                     self.clock.resume(now)
                 else:
                     self.clock.pause(now)
-            elif key == "s" and self.clock.paused:
+            elif key in ("s", "RIGHT") and self.clock.paused:
                 self._step = True
             elif key == "t":
                 self._pause_for_topics = not self._pause_for_topics
+            elif key in ("UP", "DOWN"):  # rosbag2's 10 % a press
+                self.clock.set_rate(self.clock.rate * (1.1 if key == "UP" else 0.9), now)
+                if console.form == "ros2 bag":
+                    console.say(f"[INFO] [rosbag2_player]: Set rate to {self.clock.rate:g}")
         if console.show_status:
             bag_ns = self.clock.bag_time(now) if self._started else self.window[0]
             state = "PAUSED " if self.clock.paused else "RUNNING"
-            console.status(state, bag_ns / 1e9, (bag_ns - self.reader.start_ns) / 1e9, self.total)
+            elapsed = (bag_ns - self.reader.start_ns) / 1e9
+            console.status(state, bag_ns / 1e9, elapsed, self.total, self.clock.rate)

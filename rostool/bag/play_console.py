@@ -1,4 +1,5 @@
-"""The terminal side of `bag play`: rosbag's status line on stderr and the space/s/t keys on stdin."""
+"""The terminal side of `bag play`: rosbag's status line on stderr and the keys on stdin (space, s, t, and
+rosbag2's arrows: right plays the next message, up/down change the rate)."""
 
 from __future__ import annotations
 
@@ -6,7 +7,22 @@ import contextlib
 import os
 import select
 import sys
-from typing import Any, TextIO
+from typing import Any, Literal, TextIO
+
+# Cursor keys as terminals send them (normal and application mode); other keys are their character.
+_ARROWS = {"\x1b[A": "UP", "\x1b[B": "DOWN", "\x1b[C": "RIGHT", "\x1b[D": "LEFT",
+           "\x1bOA": "UP", "\x1bOB": "DOWN", "\x1bOC": "RIGHT", "\x1bOD": "LEFT"}  # fmt: skip
+
+
+def split_keys(text: str) -> list[str]:
+    """The keys in what the terminal sent: "UP", "DOWN", "RIGHT", "LEFT" or one character each."""
+    keys = []
+    i = 0
+    while i < len(text):
+        arrow = _ARROWS.get(text[i : i + 3])
+        keys.append(arrow or text[i])
+        i += 3 if arrow else 1
+    return keys
 
 
 class Console:
@@ -23,6 +39,7 @@ class Console:
         self._saved: Any = None
         self._fd = -1
         self._shown = False
+        self.form: Literal["rosbag", "ros2 bag"] = "rosbag"  # whose help and log lines to print
 
     @classmethod
     def detect(cls, quiet: bool) -> Console:
@@ -66,10 +83,12 @@ class Console:
             return ""
         return os.read(self._fd, 64).decode(errors="replace")
 
-    def status(self, state: str, bag_time: float, elapsed: float, total: float) -> None:
+    def status(self, state: str, bag_time: float, elapsed: float, total: float, rate: float = 1.0) -> None:
         if not self.show_status:
             return
         line = f" [{state}]  Bag Time: {bag_time:13.6f}   Duration: {elapsed:.6f} / {total:.6f}"
+        if rate != 1.0:  # rosbag's line is unchanged at its default rate
+            line += f"   Rate: {rate:.3g}"
         self.err.write(f"\r{line}               \r")
         self.err.flush()
         self._shown = True

@@ -37,6 +37,14 @@ class PlayClock:
             return max(due, time.perf_counter() + 3600.0)
         return due
 
+    def set_rate(self, rate: float, now: float) -> None:
+        """Play at `rate` from now on: the bag time reached so far stays where it is."""
+        if rate <= 0:
+            raise ValueError("rate must be positive")
+        at = self.paused_at if self.paused_at is not None else now
+        self._bag0, self._wall0 = self.bag_time(now), at
+        self.rate = rate
+
     def bag_time(self, now: float) -> int:
         at = self.paused_at if self.paused_at is not None else now
         return self._bag0 + int((at - self._wall0) * self.rate * 1e9)

@@ -44,6 +44,7 @@ def run_play(ctx: click.Context, request: PlayRequest) -> PlayResult:
     ros2_form = request.form == "ros2 bag"
     with BagReader(request.bags, request.distro) as reader, live_graph(ctx) as graph:
         console = Console.detect(request.quiet)
+        console.form = request.form
         if not request.keyboard:
             console.keyboard = False
         if ros2_form and graph.encoding != "cdr":

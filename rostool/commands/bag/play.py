@@ -69,8 +69,8 @@ def play(
     bags (.mcap, .db3, rosbag2 directories) are converted to ROS 1 (`pkg/msg/T` -> `pkg/T`); topics whose
     type has no ROS 1 equivalent are skipped with a warning. These are rosbag play's flags (ROS 1);
     under ROS 2 (--ros2, ROS_VERSION=2) `bag play` takes ros2 bag play's (see `rostool --ros2 bag play -h`).
-    On a terminal, a status line shows the bag time and space pauses/resumes ('s' steps while paused,
-    't' toggles --pause-topics). Remappings may also be given as arguments (`/chatter:=/talk`), and with
+    On a terminal, a status line shows the bag time and space pauses/resumes ('s' or the right arrow
+    steps while paused, 't' toggles --pause-topics, up/down raise/lower the rate by 10 % as in rosbag2). Remappings may also be given as arguments (`/chatter:=/talk`), and with
     --topics (else --pause-topics), further topic names after the bags.
 
     \b

@@ -139,7 +139,8 @@ def play(ctx: click.Context, flags: PlayFlags) -> None:
 
     BAG is a rosbag2 directory, an .mcap or .db3 file (or a ROS 1 .bag, converted as `bag convert`
     does). The CDR bytes are published unchanged with the bag's types and recorded durability.
-    On a terminal, space pauses/resumes and 's' steps while paused.
+    On a terminal, as in rosbag2: space pauses/resumes, the right arrow (or 's') plays the next message
+    while paused, up/down raise/lower the rate by 10 %.
 
     \b
     Examples:
