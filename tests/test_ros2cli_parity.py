@@ -43,6 +43,7 @@ from tests.parity_ros2cli import (
     service_wait,
     sorted_lines,
     subscription_wait,
+    wait_ros2,
     without_observers,
 )
 from tests.support import ros2_env
@@ -261,6 +262,20 @@ CASES = [
          "std_msgs/msg/String", "{data: hi}", normalize=subscription_wait),
     case("interface proto", "(unknown type)", "interface", "proto", "std_msgs/msg/ParityNope", error=True),
     case("interface package", "(unknown package)", "interface", "package", "parity_nopkg", error=True),
+    # --- QoS: history, liveliness, lease ---
+    case("topic echo", "--qos-history", "topic", "echo", "--once", "--qos-history", "keep_all", "/chatter",
+         normalize=digits_zeroed),
+    case("topic echo", "--qos-history --qos-depth", "topic", "echo", "--once", "--qos-history", "keep_last",
+         "--qos-depth", "3", "/chatter", normalize=digits_zeroed),
+    case("topic echo", "--qos-liveliness", "topic", "echo", "--once", "--qos-liveliness", "automatic",
+         "/chatter", normalize=digits_zeroed),
+    case("topic echo", "--qos-reliability system_default", "topic", "echo", "--once", "--qos-reliability",
+         "system_default", "/chatter", normalize=digits_zeroed),
+    case("topic pub", "--qos-history", "topic", "pub", "-w", "1", "--once", "--qos-history", "keep_all",
+         "/parity_pub", "std_msgs/msg/String", "{data: hi}", normalize=subscription_wait),
+    case("topic pub", "--qos-liveliness --qos-liveliness-lease-duration-seconds", "topic", "pub", "-w", "1",
+         "--once", "--qos-liveliness", "manual_by_topic", "--qos-liveliness-lease-duration-seconds", "2",
+         "/parity_pub", "std_msgs/msg/String", "{data: hi}", normalize=subscription_wait),
 ]
 # fmt: on
 
@@ -409,12 +424,7 @@ VERBS = tuple(
     for verb in verbs.split()
 )  # fmt: skip
 # ros2's flags rostool does not have yet, and why
-_QOS_SET = "rostool's --qos-* options have no history, liveliness or lease duration (yet)"
-KNOWN_MISSING = {
-    (verb, f"--qos-{name}"): _QOS_SET
-    for verb in ("topic echo", "topic pub")
-    for name in ("history", "liveliness", "liveliness-lease-duration-seconds")
-}
+KNOWN_MISSING: dict[tuple[str, str], str] = {}
 
 
 def _ros2_flags(graph_env: dict[str, str], verb: str) -> set[str]:
@@ -634,4 +644,57 @@ def test_duplicate_node_names(twins: ParityGraph, twin_case: Case, warning: str)
             failed.append(
                 _describe(backend, twin_case, outcome.ros2, tool) + f"\nstderr: {tool.stderr_lines}"
             )
+    assert not failed, "\n".join(failed)
+
+
+# --- liveliness both ways: ros2's manual liveliness as rostool shows it, rostool's as ros2 shows it -------
+LIVELINESS = ["--qos-liveliness", "manual_by_topic", "--qos-liveliness-lease-duration-seconds", "2.5"]
+LEASE_LINES = ("  Liveliness: MANUAL_BY_TOPIC\n", "  Liveliness lease duration: 2500000000 nanoseconds\n")
+
+
+def _publishing(command: list[str], env: dict[str, str]) -> subprocess.Popen[str]:
+    return subprocess.Popen(command, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+
+
+def _stop(proc: subprocess.Popen[str]) -> None:
+    proc.send_signal(2)
+    try:
+        proc.wait(timeout=10)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait()
+
+
+def test_liveliness_both_ways(graph: ParityGraph) -> None:
+    """ros2 topic pub with manual_by_topic liveliness and a 2.5 s lease: rostool's topic info -v prints
+    ros2's text for it; rostool's pub with the same flags: ros2's topic info -v shows that kind and lease."""
+    message = ["std_msgs/msg/String", "{data: alive}"]
+    ros2_pub = ["topic", "pub", "-r", "5", *LIVELINESS, "/parity_lively", *message]
+    talker = _publishing(graph.ros2_command(ros2_pub), graph.ros2_env)
+    try:
+        assert wait_ros2(graph, ["topic", "info", "-v", "/parity_lively"], LEASE_LINES[1]), talker.stderr
+        step = listing("topic info", "-v (manual liveliness)", "topic", "info", "-v", "/parity_lively",
+                       normalize=gids)  # fmt: skip
+        outcome = graph.compare(step)
+    finally:
+        _stop(talker)
+    failed = []
+    for backend in BACKENDS:
+        tool = outcome.tools[backend]
+        ok = _same(step, outcome.ros2, tool)
+        judge(step, backend, SAME if ok else DIFFERS)
+        if not ok:
+            failed.append(_describe(backend, step, outcome.ros2, tool))
+    for backend in BACKENDS:
+        topic = f"/parity_lively_{backend}"
+        args = ["topic", "pub", "-r", "5", *LIVELINESS, topic, *message]
+        command, env = graph.rostool_command(backend, args)
+        proc = _publishing(command, env)
+        try:
+            seen = wait_ros2(graph, ["topic", "info", "-v", topic], LEASE_LINES[1])
+            shown = graph.ros2(["topic", "info", "-v", topic]).stdout
+        finally:
+            _stop(proc)
+        if not (seen and all(line in shown for line in LEASE_LINES)):
+            failed.append(f"{backend}: ros2 topic info -v of rostool's publisher:\n{shown}")
     assert not failed, "\n".join(failed)

@@ -69,6 +69,11 @@ class EndpointQos(TypedDict):
     depth: int | None
 
 
+class TopicEndpointQos(EndpointQos, total=False):
+    liveliness: str | None  # None: DDS's default (automatic)
+    liveliness_lease_duration: float | None  # seconds; None: infinite
+
+
 class TopicEndpoint(TypedDict):
     """One row of `topic_endpoints` (ros2 topic info -v): a publisher or subscription of the topic."""
 
@@ -77,7 +82,7 @@ class TopicEndpoint(TypedDict):
     type: str
     type_hash: str | None
     gid: str  # dotted hex
-    qos: EndpointQos
+    qos: TopicEndpointQos
 
 
 class ServiceEndpointFacts(TypedDict):

@@ -25,11 +25,16 @@ def topic_info_text(type_name: str, endpoints: list[dict[str, Any]], verbose: bo
                 # discovery does not carry these to rostool; ROS 2's defaults are what nodes offer
                 f"  Lifespan: {qos.get('lifespan', 'Infinite')}",
                 f"  Deadline: {qos.get('deadline', 'Infinite')}",
-                f"  Liveliness: {str(qos.get('liveliness', 'automatic')).upper()}",
-                f"  Liveliness lease duration: {qos.get('liveliness_lease_duration', 'Infinite')}",
+                f"  Liveliness: {str(qos.get('liveliness') or 'automatic').upper()}",
+                f"  Liveliness lease duration: {_duration(qos.get('liveliness_lease_duration'))}",
             ]  # fmt: skip
             items.append("\n".join(lines))
     return "".join(f"{item}\n\n" for item in items) if verbose else "\n".join(items) + "\n"
+
+
+def _duration(seconds: float | None) -> str:
+    """A duration as rclpy's Duration prints it."""
+    return "Infinite" if seconds is None else f"{round(seconds * 1e9)} nanoseconds"
 
 
 def service_info_text(found: dict[str, Any], verbose: bool) -> str:

@@ -9,7 +9,7 @@ from typing import Any
 import click
 
 from rostool.commands._common import ignored_ros2_options, interfaces_option, live_graph
-from rostool.commands._qos import qos_options
+from rostool.commands._qos import topic_qos_options
 from rostool.errors import RostoolError
 from rostool.graph.qos import QosRequest
 
@@ -43,7 +43,7 @@ from rostool.graph.qos import QosRequest
 @interfaces_option
 @ignored_ros2_options("no_daemon", "spin_time", "use_sim_time")
 @click.pass_context
-@qos_options
+@topic_qos_options
 def echo(
     ctx: click.Context, name: str, message_type: str | None, count: int | None, once: bool,
     timeout: float | None, fields: tuple[str, ...], as_json: bool, as_csv: bool, noarr: bool, nostr: bool,

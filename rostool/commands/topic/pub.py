@@ -10,7 +10,7 @@ from typing import Any
 import click
 
 from rostool.commands._common import ignored_ros2_options, interfaces_option, open_live_graph, ros_version
-from rostool.commands._qos import qos_options
+from rostool.commands._qos import topic_qos_options
 from rostool.errors import RostoolError
 from rostool.graph.qos import QosRequest
 
@@ -46,7 +46,7 @@ from rostool.graph.qos import QosRequest
 @interfaces_option
 @ignored_ros2_options("spin_time", "use_sim_time")
 @click.pass_context
-@qos_options
+@topic_qos_options
 def pub(
     ctx: click.Context, name: str, type_name: str, values: tuple[str, ...], rate: float | None, once: bool,
     latch: bool, n_value: str | None, count: int | None, node_name: str | None, times: int | None,

@@ -126,6 +126,8 @@ def to_dds_qos(profile: QosProfile, user_data: bytes | None = None) -> Any:
     if profile.depth is not None:
         keep_all = profile.depth == 0
         policies.append(Policy.History.KeepAll if keep_all else Policy.History.KeepLast(profile.depth))
+    if profile.liveliness is not None or profile.lease_duration is not None:
+        policies.append(_to_dds_liveliness(profile))
     if user_data:
         policies.append(Policy.Userdata(data=user_data))
     return Qos(*policies)
@@ -145,10 +147,37 @@ def from_dds_qos(qos: Any) -> QosProfile:
         dur = "transient_local"
     else:
         dur = str(getattr(durability, "__name__", durability)).lower()
+    liveliness, lease = _from_dds_liveliness(qos[Policy.Liveliness])
     if history is None:  # not announced (Fast DDS never sends it): unknown, as ros2cli shows it
-        return QosProfile(rel, dur, None)
+        return QosProfile(rel, dur, None, liveliness, lease)
     depth = getattr(history, "depth", 0 if history is Policy.History.KeepAll else 1)
-    return QosProfile(rel, dur, int(depth))
+    return QosProfile(rel, dur, int(depth), liveliness, lease)
+
+
+def _to_dds_liveliness(profile: QosProfile) -> Any:
+    from cyclonedds.core import Policy
+    from cyclonedds.util import duration
+
+    seconds = profile.lease_duration
+    lease = duration(infinite=True) if seconds is None else duration(seconds=seconds)
+    if profile.liveliness == "manual_by_topic":
+        return Policy.Liveliness.ManualByTopic(lease_duration=lease)
+    return Policy.Liveliness.Automatic(lease_duration=lease)
+
+
+def _from_dds_liveliness(policy: Any) -> tuple[str | None, float | None]:
+    """An endpoint's announced liveliness kind and lease (seconds; None: infinite); not announced: DDS's
+    default (automatic, infinite)."""
+    from cyclonedds.core import Policy
+    from cyclonedds.util import duration
+
+    if policy is None:
+        return None, None
+    kind = "manual_by_topic" if isinstance(policy, Policy.Liveliness.ManualByTopic) else "automatic"
+    if isinstance(policy, Policy.Liveliness.ManualByParticipant):
+        kind = "manual_by_participant"
+    lease = policy.lease_duration
+    return kind, None if lease >= duration(infinite=True) else lease / 1e9
 
 
 def user_data_of(qos: Any) -> bytes:

@@ -183,7 +183,7 @@ class Ros2Base:
 
     def use_qos(self, qos: UserQos) -> None:
         if qos.given:
-            self.qos_request = QosRequest(qos.profile, qos.reliability, qos.durability, qos.depth)
+            self.qos_request = QosRequest.of(qos)
 
     # --- nodes ---------------------------------------------------------------------------------------
     def node_info(self, name: str) -> NodeInfo:
@@ -221,8 +221,7 @@ class Ros2Base:
             {
                 "node": view.node, "endpoint_type": "PUBLISHER" if view.is_writer else "SUBSCRIPTION",
                 "type": view.type_name, "type_hash": view.type_hash, "gid": view.gid,
-                "qos": {"reliability": view.qos.reliability, "durability": view.qos.durability,
-                        "depth": view.qos.depth},
+                "qos": view.qos.endpoint_facts(),
             }
             for view in self.topic_views(resolved)
         ]  # fmt: skip
