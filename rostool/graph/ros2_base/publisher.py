@@ -10,6 +10,9 @@ if TYPE_CHECKING:
     from rostool.interfaces.ros2_types import Ros2Types
 
 
+MATCH_POLL = 0.005  # seconds between looks at the matched count (a status read: microseconds)
+
+
 class Ros2Publisher:
     def __init__(self, topic: str, store_name: str, writer: Writer, types: Ros2Types) -> None:
         self.topic = topic
@@ -25,11 +28,13 @@ class Ros2Publisher:
         self._writer.write(payload)
 
     def wait_for_subscribers(self, count: int, timeout: float) -> bool:
+        """Until `count` subscriptions matched this writer (the transport's matched count), at most
+        `timeout` s."""
         deadline = time.monotonic() + timeout
         while self.subscriber_count < count:
             if time.monotonic() >= deadline:
                 return False
-            time.sleep(0.02)
+            time.sleep(MATCH_POLL)
         return True
 
     @property

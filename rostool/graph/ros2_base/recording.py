@@ -27,10 +27,21 @@ class Ros2Source:
         graph.warn = warn  # the subscriptions' warnings (incompatible QoS) go to the same place
 
     def published_topics(self) -> list[str]:
-        """Topics another node publishes; hidden ones (a name part starting with `_`) are left out unless
-        asked for, as `ros2 bag record -a` does."""
-        published = self.graph.published_topics()
-        return sorted(t for t in published if self.include_hidden or not hidden_name(t))
+        """Topics another node publishes now, as discovery knows them this moment: the recorder asks again
+        every poll, so a topic is subscribed the moment its publisher is known, never after a settling
+        window; hidden ones (a name part starting with `_`) are left out unless asked for, as `ros2 bag
+        record -a` does."""
+        graph = self.graph
+        graph.wait_for_newcomers(0.0)  # folds in what discovery brought, waiting for nothing
+        published = {topic for topic, view in graph._all_topic_views() if view.is_writer}
+        return self._visible(published)
+
+    def topics_present(self) -> list[str]:
+        """Topics published at start-up, once discovery settled (--no-discovery's fixed list)."""
+        return self._visible(self.graph.published_topics())
+
+    def _visible(self, topics: set[str]) -> list[str]:
+        return sorted(t for t in topics if self.include_hidden or not hidden_name(t))
 
     def subscribed_topics(self, node: str) -> list[str]:
         return subscribed_by(self.graph, node)

@@ -24,6 +24,9 @@ if TYPE_CHECKING:
 
 READER_CACHE_DEPTH = 1000  # a deep local history lets a busy moment pass without losing samples
 SUBSCRIBERS_ONLY_WAIT = 0.5  # a topic with subscribers only: how long publishers are given to appear
+# how often the transport's view is asked for the topic's publishers: the reader is made this long at most
+# after discovery knew one (a look at what discovery already holds costs microseconds)
+DISCOVERY_POLL = 0.01
 
 
 class DrainingSubscription:
@@ -99,7 +102,7 @@ class DrainingSubscription:
                 for note in notes:
                     graph.warn(note)
                 return store_name, profile
-            self._closed.wait(0.05)
+            self._closed.wait(DISCOVERY_POLL)
         return None
 
     def _cache_profile(self, profile: QosProfile) -> QosProfile:

@@ -4,7 +4,7 @@ provide these; everything built on them is written once in this package."""
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Protocol
 
@@ -76,6 +76,12 @@ class Ros2Host(Graph, Protocol):
     def service_client(self, service: str, srv_type: str) -> ServiceClient: ...
 
     def topic_views(self, topic: str) -> list[EndpointView]: ...
+
+    def _all_topic_views(self) -> Iterable[tuple[str, EndpointView]]:
+        """(topic, endpoint) of every remote endpoint as the transport knows it now, without waiting."""
+        ...
+
+    def wait_for_newcomers(self, limit: float = 1.0) -> None: ...
 
     def published_topics(self) -> set[str]: ...
 
