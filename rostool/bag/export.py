@@ -44,6 +44,7 @@ class ExportResult:
     messages: int = 0
     bytes: int = 0
     files: list[str] = field(default_factory=list)
+    pieces: list[str] = field(default_factory=list)  # a piece's tables, for the caller to join (join_pieces)
     tables: dict[str, Any] = field(default_factory=dict)  # topic -> pyarrow.Table, for the "arrow" format
     images: int = 0
 
@@ -82,17 +83,32 @@ def topic_file(topic: str) -> str:
 _KEPT = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_-")
 
 
-def table_path(out: Path, topic: str, fmt: TableFormat, partition: str | None) -> Path:
+def table_path(
+    out: Path, topic: str, fmt: TableFormat, partition: str | None, piece: int | None = None
+) -> Path:
+    """Where a topic's table goes; a piece of a bag (see `export_bag`) writes beside it, to be joined."""
     if partition is None:
-        return out / f"{topic_file(topic)}.{fmt}"
-    return out / topic_file(topic) / f"bag={partition}" / f"part-0.{fmt}"
+        where = out / f"{topic_file(topic)}.{fmt}"
+    else:
+        where = out / topic_file(topic) / f"bag={partition}" / f"part-0.{fmt}"
+    return where if piece is None else where.with_name(f"{where.name}{PIECE_SUFFIX}{piece:05d}")
+
+
+PIECE_SUFFIX = ".piece-"
 
 
 def export_bag(
-    path: Path | str, options: ExportOptions, partition: str | None = None, progress: bool = False
+    path: Path | str,
+    options: ExportOptions,
+    partition: str | None = None,
+    progress: bool = False,
+    piece: tuple[int, int] | None = None,
 ) -> ExportResult:
     """Export one bag; `partition` (the bag's name) selects the dataset layout for several bags;
-    `progress` shows a bar over the messages on stderr."""
+    `progress` shows a bar over the messages on stderr. `piece` (k, n): export only the k-th of n runs of
+    the bag's chunks, into piece files (`result.pieces`) that `join_pieces` makes the bag's tables; where a
+    bag cannot be cut (not an indexed .mcap read chunk-wise, or a topic of several types) piece 0 exports it
+    all and the others nothing."""
     from rostool.bag.reader import BagReader
 
     result = ExportResult(str(path))
@@ -113,8 +129,16 @@ def export_bag(
         raw_tables = options.fmt in _COLUMNAR  # decoded column-wise in batches (columnar.py)
         try:
             chunked = _chunk_plan(reader, conns, options)
+            if piece is not None:
+                if chunked is None or _several_types(conns):  # not cut: piece 0 exports it whole
+                    if piece[0]:
+                        return result
+                    piece = None
+                else:
+                    chunked = chunked.share(*piece)
+            at = piece[0] if piece is not None else None
             if chunked is not None:
-                _export_chunks(reader, chunked, tables, options, style, partition, result, bar)
+                _export_chunks(reader, chunked, tables, options, style, partition, result, bar, at)
             for conn, timestamp, data in reader.messages(conns) if conns and chunked is None else ():
                 result.messages += 1
                 if bar is not None and not result.messages % 1024:
@@ -134,7 +158,7 @@ def export_bag(
                 if options.fmt is None or options.out is None:
                     continue
                 if table is None:
-                    table = tables[topic] = _new_table(reader, conn, options, style, partition)
+                    table = tables[topic] = _new_table(reader, conn, options, style, partition, at)
                 elif conn.msgtype != table.msgtype:
                     if topic not in skipped:
                         skipped.add(topic)
@@ -147,13 +171,13 @@ def export_bag(
                 else:
                     table.add(msg, timestamp, len(data))
             if options.fmt is not None and options.out is not None:
-                _empty_tables(reader, conns, tables, options, style, partition)
+                _empty_tables(reader, conns, tables, options, style, partition, at)
             for topic, table in tables.items():
                 if isinstance(table.sink, MemorySink):
                     table.flush()
                     result.tables[topic] = table.sink.table()
                 else:
-                    result.files.append(str(table.close()))
+                    (result.files if at is None else result.pieces).append(str(table.close()))
             for sink in images.values():
                 result.files.extend(str(p) for p in sink.close())
             if bar is not None:
@@ -169,8 +193,13 @@ def export_bag(
     return result
 
 
+def _several_types(conns: Sequence[Any]) -> bool:
+    """Whether a topic has messages of several types (its table then depends on which comes first)."""
+    return len({conn.topic for conn in conns}) < len({(conn.topic, conn.msgtype) for conn in conns})
+
+
 def _new_table(
-    reader: Any, conn: Any, options: ExportOptions, style: Any, partition: str | None
+    reader: Any, conn: Any, options: ExportOptions, style: Any, partition: str | None, piece: int | None
 ) -> TopicTable:
     """A topic's table; Parquet tables decode raw messages column-wise (ColumnarDecoder)."""
     assert options.fmt is not None and options.out is not None
@@ -184,7 +213,7 @@ def _new_table(
             return reader.deserialize(data, conn)
 
         decoder = ColumnarDecoder(plan, conn.msgtype, columns[1:], reader.ros_version == 2, deserialize)
-    where = table_path(options.out, conn.topic, options.fmt, partition)
+    where = table_path(options.out, conn.topic, options.fmt, partition, piece)
     return TopicTable(conn.msgtype, columns, where, options, decoder)
 
 
@@ -212,6 +241,7 @@ def _export_chunks(
     partition: str | None,
     result: ExportResult,
     bar: _Bar | None,
+    piece: int | None,
 ) -> None:
     """Each chunk's messages, channel by channel, straight into their tables."""
     from rostool.bag.mcap_batches import batches
@@ -221,7 +251,7 @@ def _export_chunks(
         if table is None:
             first = batch.buffer[batch.starts[0] : batch.starts[0] + batch.sizes[0]]
             reader.deserialize(first, conn)  # settles the type's definition, as the first message does
-            table = tables[conn.topic] = _new_table(reader, conn, options, style, partition)
+            table = tables[conn.topic] = _new_table(reader, conn, options, style, partition, piece)
         elif conn.msgtype != table.msgtype:
             warn(f"{conn.topic}: left out its {conn.msgtype} messages (the table holds {table.msgtype})")
             continue
@@ -239,6 +269,7 @@ def _empty_tables(
     options: ExportOptions,
     style: Any,
     partition: str | None,
+    piece: int | None,
 ) -> None:
     """Topics without messages still get a table (with its columns) when their type is known."""
     assert options.fmt is not None and options.out is not None
@@ -247,7 +278,7 @@ def _empty_tables(
         if conn.topic in tables or conn.msgtype not in fielddefs:
             continue
         plan = TypePlan(fielddefs, style, reader.ros_version)
-        where = table_path(options.out, conn.topic, options.fmt, partition)
+        where = table_path(options.out, conn.topic, options.fmt, partition, piece)
         tables[conn.topic] = TopicTable(conn.msgtype, plan.columns(conn.msgtype), where, options)
 
 
@@ -278,3 +309,23 @@ class _Bar:
 
     def stop(self) -> None:
         self._progress.stop()
+
+
+def join_pieces(pieces: Sequence[str]) -> list[str]:
+    """The tables of a bag exported in pieces: each topic's piece files joined in order (parquet_concat)
+    into the file one export would have written, and removed."""
+    from rostool.bag.parquet_concat import concat
+
+    by_table: dict[str, list[str]] = {}
+    for name in sorted(pieces):  # the piece number is zero-padded: sorted is in piece order
+        by_table.setdefault(name[: name.rindex(PIECE_SUFFIX)], []).append(name)
+    for table, names in by_table.items():
+        partial = Path(table + ".partial")
+        try:
+            concat([Path(name) for name in names], partial)
+            partial.replace(table)
+        finally:
+            partial.unlink(missing_ok=True)
+        for name in names:
+            Path(name).unlink(missing_ok=True)
+    return list(by_table)

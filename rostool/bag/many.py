@@ -14,7 +14,7 @@ import re
 import signal
 import sys
 from collections.abc import Callable, Iterator, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, TypeVar
 
@@ -30,6 +30,8 @@ T = TypeVar("T")
 class BagItem:
     path: Path | Any  # a local path, or a remote.RemotePath (object storage: copied locally by `call`)
     name: str  # unique among the bags of one command, safe as a hive partition value
+    piece: int = 0  # a big bag's work cut in `pieces` (bag export): this item's share
+    pieces: int = 1
 
 
 def is_one_bag(path: Path) -> bool:
@@ -142,7 +144,7 @@ def call(func: Work[T], item: BagItem) -> T | Failure:
 
         with local_copy(item.path) as local:
             try:
-                return func(BagItem(local, item.name))
+                return func(replace(item, path=local))
             except RostoolError as err:
                 raise RostoolError(str(err).replace(str(local), str(item.path)), err.exit_code) from err
     except RostoolError as err:
@@ -265,7 +267,8 @@ def successes(
     """`run`, keeping what succeeded. The first failure (in the bags' order) is the command's one-line
     error and ends the other workers; with `keep_going` each failure is one line on stderr as it comes,
     the other bags go on, and a last line ends the command with a non-zero exit."""
-    failed = 0
+    failed: set[str] = set()
+    bags = len({item.name for item in items})  # an item may be one piece of a bag (BagItem.pieces)
     results = (runner or run)(func, items, jobs, label, bar)  # runner: another engine (ray_engine.runner)
     try:
         for item, result in results:
@@ -273,14 +276,14 @@ def successes(
                 yield item, result
             elif result.exit_code == 130:  # a worker stopped by Ctrl+C: end as quietly as the parent does
                 raise KeyboardInterrupt
-            elif not keep_going or len(items) == 1:
+            elif not keep_going or bags == 1:
                 raise RostoolError(result.message, result.exit_code)
-            else:
+            elif item.name not in failed:
                 import click
 
-                failed += 1
+                failed.add(item.name)
                 click.echo(f"rostool: warning: skipped {item.path}: {result.message}", err=True)
     finally:
         results.close()
     if failed:
-        raise RostoolError(f"{failed} of {len(items)} bags failed (see the warnings above)")
+        raise RostoolError(f"{len(failed)} of {bags} bags failed (see the warnings above)")

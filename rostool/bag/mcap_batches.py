@@ -48,6 +48,21 @@ class ChunkPlan:
     chunks: tuple[tuple[Path, int, int], ...]  # (file, offset, length) of each Chunk record
     channels: dict[Path, dict[int, Any]]
 
+    def share(self, piece: int, pieces: int) -> ChunkPlan:
+        """The `piece`-th of `pieces` consecutive runs of chunks of about equal bytes (some may be empty)."""
+        total = sum(length for _path, _offset, length in self.chunks)
+        start = end = 0
+        done = 0
+        for index, (_path, _offset, length) in enumerate(self.chunks):
+            # a chunk belongs to the piece its middle byte falls in
+            owner = min(pieces - 1, (done + length // 2) * pieces // total) if total else 0
+            done += length
+            if owner < piece:
+                start = index + 1
+            if owner <= piece:
+                end = index + 1
+        return ChunkPlan(self.chunks[start:end], self.channels)
+
 
 def plan(paths: Sequence[Path], wanted: Mapping[tuple[str, str], Any]) -> ChunkPlan | None:
     """The chunks of `paths` holding the `wanted` (topic, message type) channels, or None when this reader

@@ -1,0 +1,144 @@
+"""`bag export` of a big .mcap cut into runs of chunks exported in parallel worker processes and joined
+byte-wise (bag/parquet_concat.py): the tables equal one export's, as pyarrow and the mcap library read them;
+a bag whose piece fails leaves nothing behind."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pyarrow as pa
+import pyarrow.dataset as ds
+import pyarrow.parquet as pq
+import pytest
+from mcap.reader import make_reader
+from mcap.writer import CompressionType, Writer
+from rosbags.typesys import Stores, get_typestore
+
+from rostool.bag.export import ExportOptions
+from rostool.bag.export_many import export_bags
+from rostool.bag.many import expand
+from rostool.bag.parquet_concat import concat
+from rostool.errors import RostoolError
+
+STORE = get_typestore(Stores.ROS2_JAZZY)
+IMU, TEXT = "sensor_msgs/msg/Imu", "std_msgs/msg/String"
+
+
+def _bag(path: Path, count: int = 6000, chunk_size: int = 16 * 1024) -> Path:
+    """An indexed .mcap of Imu and String messages (String lengths vary) in many small zstd chunks."""
+    types = STORE.types
+    rng = np.random.default_rng(7)
+    with path.open("wb") as stream:
+        writer = Writer(stream, chunk_size=chunk_size, compression=CompressionType.ZSTD)
+        writer.start("ros2", "rostool-test")
+        channels = {}
+        for topic, msgtype in (("/imu", IMU), ("/chatter", TEXT), ("/silent", TEXT)):
+            text = STORE.generate_msgdef(msgtype, ros_version=2)[0]
+            schema = writer.register_schema(msgtype, "ros2msg", text.encode())
+            channels[topic] = writer.register_channel(topic, "cdr", schema)
+        for i in range(count):
+            stamp = types["builtin_interfaces/msg/Time"](sec=i, nanosec=i % 1000)
+            header = types["std_msgs/msg/Header"](stamp=stamp, frame_id="imu_link")
+            vec = types["geometry_msgs/msg/Vector3"](x=float(i), y=rng.normal(), z=-1.0)
+            quat = types["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=0.0, w=1.0)
+            imu = types[IMU](
+                header=header, orientation=quat, orientation_covariance=rng.normal(size=9),
+                angular_velocity=vec, angular_velocity_covariance=np.zeros(9),
+                linear_acceleration=vec, linear_acceleration_covariance=np.ones(9),
+            )  # fmt: skip
+            when = 1_000_000_000 + i * 1_000_000
+            writer.add_message(channels["/imu"], when, STORE.serialize_cdr(imu, IMU), when, i)
+            if i % 3 == 0:
+                chatter = types[TEXT](data="x" * (i % 17))
+                writer.add_message(channels["/chatter"], when, STORE.serialize_cdr(chatter, TEXT), when, i)
+        writer.finish()
+    return path
+
+
+def _export(bags: list[Path], out: Path, jobs: int, piece_bytes: int, keep_going: bool = False) -> int:
+    options = ExportOptions(fmt="parquet", out=out)
+    out.mkdir()
+    return export_bags(expand(bags), options, None, jobs, keep_going, None, piece_bytes)[0].messages
+
+
+def _files(out: Path) -> list[str]:
+    return sorted(str(path.relative_to(out)) for path in out.rglob("*") if path.is_file())
+
+
+def test_a_bag_cut_in_pieces_exports_the_tables_one_export_writes(tmp_path: Path) -> None:
+    bag = _bag(tmp_path / "big.mcap")
+    with bag.open("rb") as handle:
+        summary = make_reader(handle).get_summary()
+    assert summary is not None and len(summary.chunk_indexes) > 20
+    whole = _export([bag], tmp_path / "whole", jobs=1, piece_bytes=1)
+    cut = _export([bag], tmp_path / "cut", jobs=3, piece_bytes=1)  # three worker processes, three pieces
+    assert whole == cut == 8000
+    assert _files(tmp_path / "whole") == _files(tmp_path / "cut") == [
+        "chatter.parquet", "imu.parquet", "silent.parquet",
+    ]  # fmt: skip
+    for name in ("chatter", "imu", "silent"):
+        one, joined = (pq.read_table(tmp_path / where / f"{name}.parquet") for where in ("whole", "cut"))
+        assert one.equals(joined)
+    joined_imu = pq.read_table(tmp_path / "cut" / "imu.parquet")
+    # against the mcap library's reading of the same bag: every log time, in order
+    with bag.open("rb") as handle:
+        times = [m.log_time for _s, c, m in make_reader(handle).iter_messages() if c.topic == "/imu"]
+    assert joined_imu.column(0).to_pylist() == times
+    assert joined_imu.column("linear_acceleration.x").to_pylist() == [float(i) for i in range(6000)]
+    assert pq.ParquetFile(tmp_path / "cut" / "imu.parquet").num_row_groups > 3
+    assert pq.read_table(tmp_path / "cut" / "silent.parquet").num_rows == 0
+
+
+def test_a_cut_bag_among_several_keeps_the_hive_layout(tmp_path: Path) -> None:
+    fleet = tmp_path / "fleet"
+    fleet.mkdir()
+    _bag(fleet / "a.mcap")
+    _bag(fleet / "b.mcap", count=300, chunk_size=1 << 20)  # one chunk: not cut
+    _export([fleet], tmp_path / "whole", jobs=1, piece_bytes=1)
+    _export([fleet], tmp_path / "cut", jobs=2, piece_bytes=1)
+    assert _files(tmp_path / "whole") == _files(tmp_path / "cut")
+    assert "imu/bag=a/part-0.parquet" in _files(tmp_path / "cut")
+    for where in ("whole", "cut"):
+        rows = ds.dataset(tmp_path / where / "imu", partitioning="hive").to_table()
+        assert sorted(rows.column("bag").unique().to_pylist()) == ["a", "b"]
+    one, joined = (
+        ds.dataset(tmp_path / where / "imu", partitioning="hive").to_table() for where in ("whole", "cut")
+    )
+    order = [(one.schema.names[0], "ascending"), ("bag", "ascending")]  # time, then bag
+    assert one.sort_by(order).equals(joined.sort_by(order))
+
+
+def _break_last_chunk(bag: Path) -> None:
+    with bag.open("rb") as handle:
+        summary = make_reader(handle).get_summary()
+    assert summary is not None
+    last = max(index.chunk_start_offset for index in summary.chunk_indexes)
+    with bag.open("r+b") as handle:
+        handle.seek(last)
+        handle.write(b"\x00")  # no longer a Chunk record where the index points
+
+
+def test_a_failed_piece_leaves_no_table_and_no_piece_behind(tmp_path: Path) -> None:
+    fleet = tmp_path / "fleet"
+    fleet.mkdir()
+    _break_last_chunk(_bag(fleet / "broken.mcap"))
+    _bag(fleet / "good.mcap", count=600)
+    with pytest.raises(RostoolError, match=r"broken\.mcap"):
+        _export([fleet / "broken.mcap"], tmp_path / "alone", jobs=2, piece_bytes=1)
+    assert _files(tmp_path / "alone") == []
+    with pytest.raises(RostoolError, match="1 of 2 bags failed"):  # the other bag exported all the same
+        _export([fleet], tmp_path / "out", jobs=2, piece_bytes=1, keep_going=True)
+    assert all("bag=good" in name for name in _files(tmp_path / "out")), _files(tmp_path / "out")
+    assert pq.read_table(tmp_path / "out" / "imu" / "bag=good" / "part-0.parquet").num_rows == 600
+
+
+def test_join_refuses_files_of_other_schemas(tmp_path: Path) -> None:
+    pq.write_table(pa.table({"a": [1, 2]}), tmp_path / "one.parquet")
+    pq.write_table(pa.table({"a": ["x"]}), tmp_path / "two.parquet")
+    with pytest.raises(RostoolError, match="schemas differ"):
+        concat([tmp_path / "one.parquet", tmp_path / "two.parquet"], tmp_path / "both.parquet")
+    shutil.copy(tmp_path / "one.parquet", tmp_path / "three.parquet")
+    concat([tmp_path / "one.parquet", tmp_path / "three.parquet"], tmp_path / "both.parquet")
+    assert pq.read_table(tmp_path / "both.parquet").column("a").to_pylist() == [1, 2, 1, 2]
