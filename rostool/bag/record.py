@@ -31,6 +31,7 @@ from rostool.bag.record_options import (
     RecordOptions,
     RecordResult,
     RecordStatus,
+    TopicStatus,
     check_target,
     output_format,
     target_name,
@@ -58,12 +59,22 @@ class _Queue:
         self.ready = threading.Event()
         self.accepting = True
         self.paused = False  # messages arriving while paused are not recorded (nor counted as dropped)
+        self.periods: dict[str, int] = {}  # --max-rate: topic -> least ns between two kept messages
+        self.last_kept: dict[str, int] = {}
+        self.throttled: collections.Counter[str] = collections.Counter()
         self.clock: Callable[[], int | None] | None = None  # --use-sim-time: the latest /clock, if any
 
     def put(self, topic: str, payload: bytes, origin: Any) -> None:
         now = time.time_ns() if self.clock is None else self.clock()
         if not self.accepting or self.paused or now is None:
             return
+        period = self.periods.get(topic)
+        if period is not None:  # topic_tools throttle's rule: 1/HZ since the last message kept
+            last = self.last_kept.get(topic)
+            if last is not None and now - last < period:
+                self.throttled[topic] += 1
+                return
+            self.last_kept[topic] = now
         size = len(payload)
         with self.lock:
             if self.bytes + size > self.limit:
@@ -102,6 +113,8 @@ class Recorder:
         self.exclude = _compile(options.exclude) if options.exclude else None
         self.queue = _Queue(options.buffer_bytes)
         self.queue.paused = options.start_paused
+        self.queue.periods = {source.resolve(t): round(1e9 / hz) for t, hz in options.max_rates.items()}
+        self._written_bytes: collections.Counter[str] = collections.Counter()
         self.result = RecordResult()
         self._subscribed: set[str] = set()
         self._split_index = 0 if options.split else None
@@ -259,6 +272,7 @@ class Recorder:
             self._file_start = stamp
         if sink.write(key, fields, stamp, payload):
             counts[topic] = counts.get(topic, 0) + 1
+            self._written_bytes[topic] += len(payload)
             self._written_in_file += 1
             if options.limit is not None and counts[topic] == options.limit:
                 self._topic_done()
@@ -297,7 +311,19 @@ class Recorder:
             topics=len(self.result.counts),
             dropped=sum(self.queue.dropped.values()),
             paused=self.queue.paused,
+            per_topic=self._per_topic(),
         )
+
+    def _per_topic(self) -> dict[str, TopicStatus]:
+        queue = self.queue
+        counts = dict(self.result.counts)
+        topics = sorted({*self._subscribed, *counts})
+        if self.options.use_sim_time and "/clock" not in counts:  # followed for its time, not recorded
+            topics.remove("/clock")
+        return {
+            t: TopicStatus(counts.get(t, 0), self._written_bytes[t], queue.dropped[t], queue.throttled[t])
+            for t in topics
+        }
 
     def run(
         self, stop: threading.Event, report: Callable[[RecordStatus], None] | None = None

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import os
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Literal, cast
@@ -43,6 +43,15 @@ class RecordOptions:
     wanted: Callable[[str], bool] | None = None  # replaces -a/-e/-x matching when given
     use_sim_time: bool = False  # stamp with the latest /clock; nothing is written before the first one
     start_paused: bool = False  # take no message until resumed (ros2 bag record --start-paused)
+    max_rates: Mapping[str, float] = field(default_factory=dict)  # topic -> at most this many messages/s
+
+
+@dataclass
+class TopicStatus:
+    messages: int = 0  # written
+    bytes: int = 0  # written (as received)
+    dropped: int = 0  # the disk could not keep up
+    throttled: int = 0  # left out by --max-rate
 
 
 @dataclass
@@ -53,6 +62,7 @@ class RecordStatus:
     topics: int
     dropped: int
     paused: bool = False
+    per_topic: dict[str, TopicStatus] = field(default_factory=dict)
 
 
 @dataclass
@@ -67,6 +77,21 @@ class RecordResult:
     @property
     def messages(self) -> int:
         return sum(self.counts.values())
+
+
+def parse_max_rates(values: Sequence[str]) -> dict[str, float]:
+    """`--max-rate TOPIC:HZ` values (repeatable)."""
+    rates = {}
+    for value in values:
+        topic, sep, hz = value.rpartition(":")
+        try:
+            rate = float(hz)
+        except ValueError:
+            rate = 0.0
+        if not sep or not topic or not rate > 0:
+            raise RostoolError(f"--max-rate {value!r}: expected TOPIC:HZ with HZ > 0, e.g. /camera/image:2")
+        rates[topic] = rate
+    return rates
 
 
 # -- names ---------------------------------------------------------------------------------------

@@ -47,3 +47,13 @@ def warner(quiet: bool) -> Callable[[str], None]:
     if quiet:
         return lambda text: None
     return lambda text: click.echo(f"rostool: warning: {text}", err=True)
+
+
+max_rate_option = click.option(
+    "--max-rate", multiple=True, metavar="TOPIC:HZ",
+    help="Keep at most HZ messages a second of TOPIC (1/HZ since the last one kept; repeatable).",
+)  # fmt: skip
+progress_option = click.option(
+    "--progress", type=click.FloatRange(min=0), default=10.0, show_default=True, metavar="S",
+    help="rostool: when stderr is not a terminal, a progress line every S seconds (0: none).",
+)  # fmt: skip

@@ -1,11 +1,15 @@
-"""The terminal side of `bag record`: the progress line, and pausing (space on a terminal, SIGUSR1)."""
+"""The terminal side of `bag record`: the live dashboard (a progress line when not on a terminal), and pausing
+(space on a terminal, SIGUSR1)."""
 
 from __future__ import annotations
 
+import collections
 import contextlib
+import shutil
 import signal
 import sys
 import threading
+import time
 from collections.abc import Callable, Iterator
 
 from rostool.bag.play_console import Console
@@ -14,30 +18,92 @@ from rostool.bag.record_options import RecordStatus
 KEY_POLL = 0.05  # seconds between looks at the keyboard
 
 
-class RecordProgress:
-    """One status line on stderr, rewritten in place."""
+class RecordDashboard:
+    """On a terminal: a header line and one line per topic (messages, rate, bandwidth, bytes written,
+    dropped, and throttled by --max-rate), redrawn in place (rosbag_fancy's idea)."""
+
+    WINDOW = 2.0  # seconds the rate and bandwidth are averaged over
 
     def __init__(self) -> None:
-        self._shown = False
+        self._drawn = 0  # lines of the last drawing still on the screen
+        self._history: collections.deque[tuple[float, dict[str, tuple[int, int]]]] = collections.deque()
+        self._started = time.monotonic()
+        self._path = ""
+        self._bytes = 0
+
+    def __call__(self, status: RecordStatus) -> None:
+        now = time.monotonic()
+        self._history.append((now, {t: (s.messages, s.bytes) for t, s in status.per_topic.items()}))
+        while len(self._history) > 2 and now - self._history[1][0] >= self.WINDOW:
+            self._history.popleft()
+        if str(status.path) != ".":  # the final status comes after the file was closed
+            self._path, self._bytes = str(status.path), status.bytes
+        self._draw(self.lines(status, now))
+
+    def lines(self, status: RecordStatus, now: float) -> list[str]:
+        from rostool.graph.rates import format_bytes
+
+        elapsed = int(now - self._started)
+        state = "  [PAUSED]" if status.paused else ""
+        rows = [("topic", "msgs", "rate", "bandwidth", "written", "dropped", "throttled")]
+        then, before = self._history[0]
+        span = now - then
+        for topic, s in status.per_topic.items():
+            old_msgs, old_bytes = before.get(topic, (0, 0))
+            rate = (s.messages - old_msgs) / span if span > 0 else 0.0
+            bandwidth = (s.bytes - old_bytes) / span if span > 0 else 0.0
+            rows.append((topic, str(s.messages), f"{rate:.1f}/s", f"{format_bytes(bandwidth)}/s",
+                         format_bytes(s.bytes), str(s.dropped), str(s.throttled)))  # fmt: skip
+        if not any(s.throttled for s in status.per_topic.values()):
+            rows = [row[:-1] for row in rows]
+        widths = [max(len(row[i]) for row in rows) for i in range(len(rows[0]))]
+        table = ["  " + "  ".join(c.ljust(w) if i == 0 else c.rjust(w) for i, (c, w) in
+                 enumerate(zip(row, widths, strict=True))) for row in rows]  # fmt: skip
+        header = (
+            f" recording {self._path}: {status.messages} msgs on {status.topics} topic"
+            f"{'' if status.topics == 1 else 's'}, {format_bytes(self._bytes)}, "
+            f"{elapsed // 60:02d}:{elapsed % 60:02d}{state}"
+        )
+        return [header, *table]
+
+    def _draw(self, lines: list[str]) -> None:
+        width = max(20, shutil.get_terminal_size().columns - 1)  # no line may wrap: redrawing counts lines
+        out = [f"\x1b[{self._drawn}F"] if self._drawn else []
+        out += [f"\x1b[2K{line[:width]}\n" for line in lines]
+        out.append("\x1b[J")  # a shorter drawing leaves nothing of the last one below it
+        sys.stderr.write("".join(out))
+        sys.stderr.flush()
+        self._drawn = len(lines)
+
+    def end(self) -> None:
+        """Leave the last drawing where it is; what is written next goes below it."""
+        self._drawn = 0
+
+
+class PlainProgress:
+    """Not on a terminal: one progress line every `interval` seconds."""
+
+    def __init__(self, interval: float) -> None:
+        self.interval = interval
+        self._next = time.monotonic() + interval
 
     def __call__(self, status: RecordStatus) -> None:
         from rostool.graph.rates import format_bytes
 
+        now = time.monotonic()
+        if now < self._next or str(status.path) == ".":
+            return
+        self._next = now + self.interval
+        paused = " (paused)" if status.paused else ""
         dropped = f", {status.dropped} dropped" if status.dropped else ""
-        state = " [PAUSED]" if status.paused else ""
         sys.stderr.write(
-            f"\r recording{state} {status.path}: {status.messages} msgs on {status.topics} "
-            f"topic{'' if status.topics == 1 else 's'}, "
-            f"{format_bytes(status.bytes)}{dropped}    "
+            f"rostool: recording {status.path}{paused}: {status.messages} msgs on {status.topics} topic"
+            f"{'' if status.topics == 1 else 's'}, {format_bytes(status.bytes)}{dropped}\n"
         )
         sys.stderr.flush()
-        self._shown = True
 
     def end(self) -> None:
-        if self._shown:
-            sys.stderr.write("\n")
-            sys.stderr.flush()
-            self._shown = False
+        pass
 
 
 @contextlib.contextmanager

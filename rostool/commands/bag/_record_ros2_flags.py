@@ -65,6 +65,8 @@ class RecordFlags:
     static_topics_path: str | None
     storage_preset_profile: str | None
     storage_config_file: str | None
+    max_rate: tuple[str, ...]
+    progress: float
     interface_paths: tuple[str, ...]
     qos: QosRequest
 

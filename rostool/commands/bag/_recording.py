@@ -28,19 +28,25 @@ class RecordRequest:
     interface_paths: tuple[str, ...]
     include_hidden: bool  # subscribe to hidden topics (/_x) too
     quiet: bool
-    form: Literal["rosbag", "ros2 bag"]  # whose messages: rosbag's progress line or ros2 bag's log lines
+    form: Literal["rosbag", "ros2 bag"]  # whose messages: rosbag's or ros2 bag's
     selector: TopicSelector | None = None  # ros2 bag record's rules (they ask the graph for types)
     no_discovery: bool = False  # only the topics present at the start
     keyboard: bool = True  # space pauses and resumes when stdin is a terminal
+    progress_every: float = 10.0  # seconds between progress lines when stderr is not a terminal (0: none)
 
 
 def run_record(ctx: click.Context, request: RecordRequest) -> None:
     from rostool.bag.record import Recorder, stop_on_signals
     from rostool.commands._common import live_graph
-    from rostool.commands.bag._record_console import RecordProgress, pause_controls
+    from rostool.commands.bag._record_console import PlainProgress, RecordDashboard, pause_controls
 
     ros2_form = request.form == "ros2 bag"
-    progress = None if request.quiet or ros2_form or not sys.stderr.isatty() else RecordProgress()
+    progress: RecordDashboard | PlainProgress | None = None
+    if not request.quiet:
+        if sys.stderr.isatty():
+            progress = RecordDashboard()
+        elif request.progress_every > 0:
+            progress = PlainProgress(request.progress_every)
     stop = threading.Event()
     with live_graph(ctx, request.interface_paths) as graph:
         graph.use_qos(request.qos)
@@ -77,6 +83,8 @@ def run_record(ctx: click.Context, request: RecordRequest) -> None:
                 click.echo(_pause_hint(keys, recorder.paused, ros2_form), err=True)
             try:
                 result = recorder.run(stop, progress)
+                if isinstance(progress, RecordDashboard):
+                    progress(recorder.status())  # the final counts
             finally:
                 if progress is not None:
                     progress.end()

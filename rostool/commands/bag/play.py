@@ -70,8 +70,9 @@ def play(
     type has no ROS 1 equivalent are skipped with a warning. These are rosbag play's flags (ROS 1);
     under ROS 2 (--ros2, ROS_VERSION=2) `bag play` takes ros2 bag play's (see `rostool --ros2 bag play -h`).
     On a terminal, a status line shows the bag time and space pauses/resumes ('s' or the right arrow
-    steps while paused, 't' toggles --pause-topics, up/down raise/lower the rate by 10 % as in rosbag2). Remappings may also be given as arguments (`/chatter:=/talk`), and with
-    --topics (else --pause-topics), further topic names after the bags.
+    steps while paused, 't' toggles --pause-topics, up/down raise/lower the rate by 10 % as in rosbag2).
+    Remappings may also be given as arguments (`/chatter:=/talk`), and with --topics (else
+    --pause-topics), further topic names after the bags.
 
     \b
     Examples:

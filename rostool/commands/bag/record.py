@@ -10,7 +10,7 @@ import click
 from rostool.commands._common import interfaces_option
 from rostool.commands._qos import qos_options
 from rostool.commands.bag._flags import parsed_into
-from rostool.commands.bag._options import CONTEXT
+from rostool.commands.bag._options import CONTEXT, max_rate_option, progress_option
 from rostool.errors import RostoolError
 from rostool.graph.qos import QosRequest
 
@@ -36,6 +36,8 @@ class RecordFlags:
     force: bool
     include_hidden_topics: bool
     start_paused: bool
+    max_rate: tuple[str, ...]
+    progress: float
     interface_paths: tuple[str, ...]
     qos: QosRequest
 
@@ -67,6 +69,8 @@ class RecordFlags:
 @click.option("--include-hidden-topics", is_flag=True, help="ROS 2: -a/-e also record hidden topics (/_x).")
 @click.option("--start-paused", is_flag=True,
               help="Start paused: nothing is recorded until space (or SIGUSR1) resumes.")  # fmt: skip
+@max_rate_option
+@progress_option
 @interfaces_option
 @qos_options
 @parsed_into(RecordFlags)
@@ -78,7 +82,8 @@ def record(ctx: click.Context, flags: RecordFlags) -> None:
     leave a complete, indexed bag (exit 0). After a crash or `kill -9`, `rostool bag reindex
     NAME.bag.active` recovers all but the last 0.1 s. .mcap/.db3 outputs are ROS 2 bags (types
     converted to pkg/msg/T). With -a or -e, topics that appear later are recorded too. On a terminal,
-    space pauses and resumes (SIGUSR1 too).
+    space pauses and resumes (SIGUSR1 too) and a dashboard shows each topic's messages, rate, bandwidth,
+    bytes written and drops.
 
     These are rosbag record's flags (ROS 1); under ROS 2 (--ros2, ROS_VERSION=2) `bag record` takes ros2
     bag record's and writes a rosbag2 directory (see `rostool --ros2 bag record -h`).
@@ -90,8 +95,9 @@ def record(ctx: click.Context, flags: RecordFlags) -> None:
       rostool bag record -e '/camera/.*' -x '.*compressed.*' --split --size 1024 --max-splits 5
       rostool bag record --node /move_base -l 100
       rostool bag record -a --duration 30s --format mcap
+      rostool bag record -a --max-rate /camera/image_raw:2   # at most 2 images a second
     """
-    from rostool.bag.record_options import RecordOptions
+    from rostool.bag.record_options import RecordOptions, parse_max_rates
     from rostool.commands.bag._recording import RecordRequest, run_record
 
     if flags.output_name and flags.output_prefix:
@@ -116,6 +122,7 @@ def record(ctx: click.Context, flags: RecordFlags) -> None:
         node=flags.node,
         force=flags.force,
         start_paused=flags.start_paused,
+        max_rates=parse_max_rates(flags.max_rate),
     )
     if flags.compression and options.fmt not in (None, "bag"):
         raise RostoolError("--lz4/--bz2 compress ROS 1 .bag chunks; leave them out with --format mcap/db3")
@@ -126,6 +133,7 @@ def record(ctx: click.Context, flags: RecordFlags) -> None:
         include_hidden=flags.include_hidden_topics,
         quiet=flags.quiet,
         form="rosbag",
+        progress_every=flags.progress,
     )
     run_record(ctx, request)
 

@@ -12,7 +12,7 @@ import click
 from rostool.commands._common import interfaces_option
 from rostool.commands._qos import qos_options
 from rostool.commands.bag._flags import ListCommand, parsed_into
-from rostool.commands.bag._options import CONTEXT
+from rostool.commands.bag._options import CONTEXT, max_rate_option, progress_option
 from rostool.commands.bag._record_ros2_flags import RecordFlags, check_flags, topic_rules
 from rostool.errors import RostoolError
 
@@ -107,6 +107,8 @@ RECORD_LISTS = (
 @click.option("--static-topics-path", metavar="FILE", help="Not supported yet (refused in one line).")
 @click.option("--storage-preset-profile", metavar="PROFILE", help="Not supported yet (refused in one line).")
 @click.option("--storage-config-file", metavar="FILE", help="Not supported yet (refused in one line).")
+@max_rate_option
+@progress_option
 @interfaces_option
 @qos_options
 @parsed_into(RecordFlags)
@@ -116,7 +118,8 @@ def record(ctx: click.Context, flags: RecordFlags) -> None:
     Writes a rosbag2 directory (metadata.yaml and NAME_0.mcap, NAME_1.mcap, ...) that ros2 bag, rosbags
     and every rostool bag verb read. Messages are stored as received (CDR) with the publisher's QoS and
     the receive time. With -a/--all-topics/-e/--topic-types, topics that appear later are recorded too.
-    Ctrl+C and SIGTERM leave a complete bag (exit 0). SPACE on a terminal (or SIGUSR1) pauses and resumes.
+    Ctrl+C and SIGTERM leave a complete bag (exit 0). On a terminal SPACE (or SIGUSR1) pauses and resumes,
+    and a dashboard shows each topic's messages, rate, bandwidth, bytes written and drops.
 
     \b
     Examples:
@@ -126,9 +129,10 @@ def record(ctx: click.Context, flags: RecordFlags) -> None:
       rostool --ros2 bag record -a -d 60 --compression-mode file --compression-format zstd
       rostool --ros2 bag record /chatter -o chatter.mcap  # one .mcap file, no directory
       rostool --ros2 bag record -a --start-paused         # SPACE starts recording
+      rostool --ros2 bag record -a --max-rate /points:5   # at most 5 point clouds a second
     """
     from rostool.bag.qos_overrides import qos_overrides
-    from rostool.bag.record_options import RecordOptions
+    from rostool.bag.record_options import RecordOptions, parse_max_rates
     from rostool.bag.record_select import TopicSelector
     from rostool.bag.rosbag2_dir import Rosbag2Layout
     from rostool.commands.bag._recording import RecordRequest, run_record
@@ -174,6 +178,7 @@ def record(ctx: click.Context, flags: RecordFlags) -> None:
         wanted=selector,
         use_sim_time=flags.use_sim_time,
         start_paused=flags.start_paused,
+        max_rates=parse_max_rates(flags.max_rate),
     )
     request = RecordRequest(
         options=options,
@@ -185,5 +190,6 @@ def record(ctx: click.Context, flags: RecordFlags) -> None:
         selector=selector,
         no_discovery=flags.no_discovery,
         keyboard=not flags.disable_keyboard_controls,
+        progress_every=flags.progress,
     )
     run_record(ctx, request)
