@@ -4,7 +4,11 @@ Two fleets, generated in /tmp and removed afterwards: BAGS rosbag2 .mcap bags of
 column-wise: cheap per message) and BAGS bags of tf2_msgs/TFMessage (sequences of messages: decoded one by
 one, the expensive case). Each command is a new process; medians of --runs (wall and CPU of the child).
 
+With --single N: one .mcap of N Imu messages (2,900,000 make ~1 GB) instead, cut into runs of chunks that
+the workers export in parallel and that are joined byte-wise (bag/export_many.py); -j 1 exports it whole.
+
 Run: .venv/bin/python bench/bench_export_ray.py [--bags 4] [--imu 1000000] [--tf 100000] [--runs 3]
+     .venv/bin/python bench/bench_export_ray.py --single 2900000 [--runs 3]
 """
 
 from __future__ import annotations
@@ -44,17 +48,22 @@ def main() -> None:
     parser.add_argument("--imu", type=int, default=1_000_000, help="Imu messages per bag")
     parser.add_argument("--tf", type=int, default=100_000, help="TFMessage messages per bag")
     parser.add_argument("--runs", type=int, default=3)
+    parser.add_argument("--single", type=int, default=0, help="one bag of this many Imu messages instead")
     args = parser.parse_args()
     env = {k: v for k, v in os.environ.items() if not k.startswith("RAY_")}
     print(f"load average {os.getloadavg()[0]:.1f}, {os.cpu_count()} CPUs")
     print("| fleet | messages | engine | wall s | CPU s (driver) | vs -j 1 (wall) |")
     print("|---|---|---|---|---|---|")
-    for label, msgtype, count in (
-        ("Imu", "sensor_msgs/msg/Imu", args.imu),
-        ("TFMessage", "tf2_msgs/msg/TFMessage", args.tf),
-    ):
-        with tempfile.TemporaryDirectory(prefix="bench-ray-") as tmp:
+    cases = [("Imu", "sensor_msgs/msg/Imu", args.imu), ("TFMessage", "tf2_msgs/msg/TFMessage", args.tf)]
+    if args.single:
+        args.bags, cases = 1, [("Imu, one bag", "sensor_msgs/msg/Imu", args.single)]
+    for label, msgtype, count in cases:
+        with tempfile.TemporaryDirectory(prefix="bench-ray-", dir=os.environ.get("BENCH_TMP")) as tmp:
             root = fleet(Path(tmp) / "fleet", msgtype, args.bags, count)
+            if args.single:
+                root = root / "bag0"
+                size = sum(f.stat().st_size for f in root.iterdir())
+                print(f"one bag: {size / 2**20:.0f} MiB")
             out = Path(tmp) / "out"
             base = [sys.executable, "-m", "rostool", "bag", "export", str(root), "-o", str(out)]
             baseline = None
