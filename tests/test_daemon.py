@@ -269,3 +269,41 @@ def test_a_socket_directory_that_is_not_private_is_refused(
     assert names(listed) == ["/refused"]  # still answered, directly
     assert len(listed.stderr.splitlines()) == 1 and expected in listed.stderr
     assert not list(folder.iterdir())
+
+
+@pytest.mark.parametrize("distro", ["jazzy"])
+def test_spin_time_is_the_direct_listings_discovery_wait(
+    tool: Tool, tool_popen: Callable[[list[str]], subprocess.Popen[str]],
+    start_peer: Callable[..., RclpyPeer], graph_env: dict[str, str],
+) -> None:  # fmt: skip
+    # an empty graph: the listing waits the given time, not its own window, and says so
+    empty = tool(["node", "list", "--no-daemon", "--spin-time", "0.5"])
+    assert empty.returncode == 1 and "within 0.5 s" in empty.stderr, empty.stderr
+    # a node that starts after the listing did is listed: it spins its whole time (as ros2cli's DirectNode)
+    listing = tool_popen(["topic", "list", "--no-daemon", "--spin-time", "12"])
+    start_peer("--name", "late_spinner", "--talk", "/late_spin")
+    assert listing.poll() is None, "the listing answered before its spin time"
+    out, err = listing.communicate(timeout=60)
+    assert listing.returncode == 0 and "/late_spin" in out.split(), err
+    # a running daemon answers: --spin-time only applies without one (ros2cli's words)
+    assert tool(["daemon", "start"], timeout=60).returncode == 0
+    served = tool(["topic", "list", "--spin-time", "30"], timeout=20)
+    assert served.returncode == 0 and "/late_spin" in served.stdout.split(), served.stderr
+
+
+@pytest.mark.parametrize("distro", ["jazzy"])
+def test_a_peer_killed_with_sigkill_is_never_listed_after_its_lease(
+    tool: Tool, start_peer: Callable[..., RclpyPeer], graph_env: dict[str, str]
+) -> None:
+    start_peer("--name", "keeper")
+    doomed = start_peer("--name", "killed", "--talk", "/killed_topic", "--service", "/killed_srv")
+    assert tool(["daemon", "start"], timeout=60).returncode == 0
+    assert wait_until(lambda: tool(["node", "list"]).stdout.split() == ["/keeper", "/killed"], timeout=20)
+    doomed.proc.kill()
+    doomed.proc.wait()
+    # gone once its lease expires (Fast DDS's default: 20 s), and then never listed again
+    assert wait_until(lambda: tool(["node", "list"]).stdout.split() == ["/keeper"], timeout=45)
+    for args, gone in ((["topic", "list"], "/killed_topic"), (["service", "list"], "/killed_srv")):
+        listed = tool(args)
+        assert listed.returncode == 0 and gone not in listed.stdout.split(), (args, listed.stdout)
+    assert tool(["node", "list"]).stdout.split() == ["/keeper"]

@@ -51,11 +51,16 @@ def interface_style(ctx: click.Context, type_name: str = "") -> Literal["ros1", 
 def open_live_graph(
     ctx: click.Context, interface_paths: Sequence[str] = (), node_name: str = "rostool"
 ) -> Graph:
-    """The live graph the root options select; through the graph daemon unless the verb's `--no-daemon`."""
+    """The live graph the root options select; through the graph daemon unless the verb's `--no-daemon`; a
+    direct ROS 2 listing waits the verb's `--spin-time` for discovery."""
     from rostool.graph import open_graph
 
     use_daemon = not ctx.params.get("no_daemon")
-    return open_graph(ros_version(ctx), node_name, interface_paths, ros2_backend(ctx), use_daemon=use_daemon)
+    spin_time = ctx.params.get("spin_time")
+    return open_graph(
+        ros_version(ctx), node_name, interface_paths, ros2_backend(ctx), use_daemon=use_daemon,
+        spin_time=spin_time,
+    )  # fmt: skip
 
 
 @contextmanager
@@ -195,14 +200,21 @@ def _load(spec: str) -> click.Command:
     return command
 
 
+spin_time_option = click.option(
+    "--spin-time", type=click.FloatRange(min=0), metavar="S",
+    help="ROS 2: seconds to wait for discovery when no graph daemon answers (or with --no-daemon), as "
+    "ros2cli; default: until discovery settles.",
+)  # fmt: skip
+
+
 def ignored_ros2_options(*names: str) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
-    """ros2cli options that have no meaning for rostool: accepted, said so in --help, and ignored."""
+    """ros2cli's shared options, accepted in its forms and kept out of the verb's own arguments; the graph
+    reads `--no-daemon` and `--spin-time` from the verb's context (`open_live_graph`), the others mean
+    nothing here (said so in --help)."""
     choices = {
         "no_daemon": click.option("--no-daemon", is_flag=True,
                                   help="Ask the ROS 2 graph directly, not its daemon (ROSTOOL_NO_DAEMON=1)."),
-        "spin_time": click.option("--spin-time", type=float, metavar="S",
-                                  help="Accepted and ignored (ros2cli: discovery wait; rostool waits for "
-                                  "discovery to settle itself)."),
+        "spin_time": spin_time_option,
         "use_sim_time": click.option("-s", "--use-sim-time", is_flag=True,
                                      help="ROS 2: accepted and ignored (rostool uses the wall clock)."),
         "wall_time": click.option("--wall-time", is_flag=True,

@@ -44,11 +44,13 @@ def open_graph(
     interface_paths: Sequence[str] = (),
     ros2_backend: str | None = None,
     use_daemon: bool = True,
+    spin_time: float | None = None,
 ) -> Graph:
     """Connect to the live graph of the selected ROS version. Types missing from the built-in ones are looked
     for in `interface_paths` (default: ROSTOOL_INTERFACES), ROS_PACKAGE_PATH and the workspace. ROS 2 goes
     through rclpy or rostool's DDS as `ros2_backend` (default: ROSTOOL_ROS2_BACKEND, else auto) chooses,
-    and through the user's graph daemon unless `use_daemon` is false or ROSTOOL_NO_DAEMON=1."""
+    and through the user's graph daemon unless `use_daemon` is false or ROSTOOL_NO_DAEMON=1; when it
+    answers directly, its listings wait `spin_time` seconds for discovery (None: until it settles)."""
     from rostool.interfaces.sources import interface_paths_from_env
 
     version = select_ros_version(explicit_version)
@@ -58,7 +60,7 @@ def open_graph(
         def direct() -> Graph:
             from rostool.graph.backends import open_ros2
 
-            return open_ros2(ros2_backend, node_name, interface_paths)[1]
+            return open_ros2(ros2_backend, node_name, interface_paths, spin_time)[1]
 
         if not (use_daemon and daemon_allowed()):
             return direct()

@@ -11,17 +11,27 @@ if TYPE_CHECKING:
 
 
 def open_ros2(
-    backend: str | None, node_name: str = "rostool", interface_paths: Sequence[str] = ()
+    backend: str | None,
+    node_name: str = "rostool",
+    interface_paths: Sequence[str] = (),
+    spin_time: float | None = None,
 ) -> tuple[str, Ros2Base]:
     """(the backend chosen: "rclpy" or "dds", its graph) for `backend` (auto|rclpy|dds; None: the
-    environment's choice)."""
+    environment's choice); its listings wait `spin_time` seconds for discovery (None: until it settles)."""
     from rostool.graph.rclpy.select import choose
 
     chosen = choose(backend).backend
+    graph: Ros2Base
     if chosen == "rclpy":
         from rostool.graph.rclpy.graph import RclpyGraph
 
-        return chosen, RclpyGraph(node_name, interface_paths=interface_paths)
-    from rostool.graph.ros2.graph import Ros2Graph
+        graph = RclpyGraph(node_name, interface_paths=interface_paths)
+    else:
+        from rostool.graph.ros2.discovery import start_discovery
 
-    return chosen, Ros2Graph(node_name, interface_paths=interface_paths)
+        discovery = start_discovery()  # first: discovery runs while the rest is imported and built
+        from rostool.graph.ros2.graph import Ros2Graph
+
+        graph = Ros2Graph(node_name, interface_paths=interface_paths, discovery=discovery)
+    graph.spin_time = spin_time  # type: ignore[attr-defined]
+    return chosen, graph

@@ -1,4 +1,5 @@
-"""ros2 node's options with no meaning here, shared by `node list` and `node info`."""
+"""ros2 node's shared options (`node list`, `node info`): --no-daemon and --spin-time, read by the graph from
+the verb's context, and -s/--use-sim-time, which means nothing here."""
 
 from __future__ import annotations
 
@@ -7,14 +8,15 @@ from typing import Any
 
 import click
 
+from rostool.commands._common import spin_time_option
+
 
 def ignored_node_options(func: Any) -> Any:
-    """ros2cli's node options with no meaning here: accepted, said so in --help, ignored."""
+    """ros2cli's node options, kept out of the verb's own arguments."""
     options = (
         click.option("--no-daemon", is_flag=True,
                      help="Ask the ROS 2 graph directly, not its daemon (ROSTOOL_NO_DAEMON=1)."),
-        click.option("--spin-time", type=float, metavar="S",
-                     help="Accepted and ignored (rostool waits for discovery to settle itself)."),
+        spin_time_option,
         click.option("-s", "--use-sim-time", is_flag=True, help="Accepted and ignored (wall clock)."),
     )  # fmt: skip
 

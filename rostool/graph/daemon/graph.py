@@ -77,7 +77,12 @@ class DaemonGraph:
             try:
                 return SERVED[method][1](self._client.query(method, list(args)))
             except DaemonAbsent:
+                # the direct graph's discovery first: the daemon's start-up would otherwise take the CPU
+                # this process needs to start its own participant
+                direct = self.direct
                 self._start()
+                self._bypass = True
+                return getattr(direct, method)(*args)
             except OtherBuild:
                 self._client.start_detached(replacing=True)  # it waits for the old one's lock
             except DaemonSilent as err:

@@ -54,6 +54,8 @@ class RclpyGraph(Ros2Base):
         self._settled = False
         self._long_lived = False  # the daemon's graph: settled once, then rmw keeps it current
         self._record_settled = False
+        self.spin_time: float | None = None  # --spin-time: a listing's discovery wait, as ros2cli's
+        self._spin_deadline: float | None = None
 
     @property
     def types(self) -> Ros2Types:  # type: ignore[override]
@@ -107,6 +109,8 @@ class RclpyGraph(Ros2Base):
         than this process was seen."""
         if self._long_lived:
             return True
+        if self.spin_time is not None:
+            return self._spin(self.spin_time, require_peers, until)
         started = time.monotonic()
         last = self._snapshot()
         baseline = {name for name, _types in last[1]}  # this node's own topics (/parameter_events)
@@ -134,6 +138,24 @@ class RclpyGraph(Ros2Base):
             current = self._snapshot()
             if current != last:
                 last, changed = current, time.monotonic()
+
+    def _spin(self, seconds: float, require_peers: bool, until: Callable[[], bool] | None) -> bool:
+        """Wait `seconds` from the first listing, as ros2cli's --spin-time (or until `until()`)."""
+        _ = self.node
+        if self._spin_deadline is None:
+            self._spin_deadline = time.monotonic() + seconds
+        while time.monotonic() < self._spin_deadline:
+            if until is not None and until():
+                return True
+            time.sleep(min(0.05, max(0.0, self._spin_deadline - time.monotonic())))
+        if self.node_pairs():
+            return True
+        if require_peers and self.require_peers:
+            raise RostoolError(
+                f"no ROS 2 nodes found on domain {domain_id()} within {seconds:g} s (rclpy backend, "
+                f"--spin-time): is anything running with this ROS_DOMAIN_ID? {self._range_hint()}"
+            )
+        return False
 
     def _listing(self, nodes: bool = False) -> None:
         self.settle(require_peers=True)

@@ -170,10 +170,18 @@ def _decode(raw: bytes, gid_size: int) -> tuple[bytes, list[NodeEntry]]:
 # --- the cache ---------------------------------------------------------------------------------------
 
 
-class GraphCache:
-    """Everything discovered so far; `poll()` folds in new built-in and ros_discovery_info samples."""
+def start_discovery() -> GraphCache:
+    """A participant and its built-in readers, started before anything else a process imports or builds:
+    remote participants describe themselves on their own schedule (Fast DDS about 1 s after it meets a new
+    participant), so the sooner it exists, the sooner a listing can answer."""
+    return GraphCache(dds.Participant())
 
-    def __init__(self, participant: dds.Participant, info_reader: Any) -> None:
+
+class GraphCache:
+    """Everything discovered so far; `poll()` folds in new built-in and ros_discovery_info samples
+    (those once the session gives its ros_discovery_info reader: `info_reader`)."""
+
+    def __init__(self, participant: dds.Participant, info_reader: Any = None) -> None:
         from cyclonedds.builtin import (
             BuiltinDataReader,
             BuiltinTopicDcpsParticipant,
@@ -181,13 +189,14 @@ class GraphCache:
             BuiltinTopicDcpsSubscription,
         )
 
+        self.participant = participant
         self.own = participant.guid
         self._lock = threading.RLock()
         dp = participant.dp
         self._participants_reader = BuiltinDataReader(dp, BuiltinTopicDcpsParticipant)
         self._publications_reader = BuiltinDataReader(dp, BuiltinTopicDcpsPublication)
         self._subscriptions_reader = BuiltinDataReader(dp, BuiltinTopicDcpsSubscription)
-        self._info_reader = info_reader
+        self.info_reader = info_reader
         self.participants: dict[bytes, bytes] = {}  # GUID -> USER_DATA
         self.first_seen: dict[bytes, float] = {}
         self.endpoints: dict[bytes, Endpoint] = {}
@@ -206,6 +215,7 @@ class GraphCache:
                 if sample.sample_info.instance_state != InstanceState.Alive:
                     changed |= self.participants.pop(key, None) is not None
                     self.nodes.pop(key, None)
+                    self.first_seen.pop(key, None)  # a long-lived cache keeps nothing of the gone
                     continue
                 if key not in self.participants:
                     changed = True
@@ -229,6 +239,8 @@ class GraphCache:
                     )  # fmt: skip
                     changed = True
             changed |= self._poll_info()
+            for gone in [key for key in self.nodes if key not in self.participants]:
+                del self.nodes[gone]  # a leaver's last ros_discovery_info may come after it is gone
             if changed:
                 self.changed = time.monotonic()
         return changed
@@ -239,8 +251,10 @@ class GraphCache:
 
         mask = SampleState.Any | ViewState.Any | InstanceState.Any
         changed = False
+        if self.info_reader is None:
+            return changed
         while True:
-            samples = ddspy_take(self._info_reader._ref, mask, 64)
+            samples = ddspy_take(self.info_reader._ref, mask, 64)
             if isinstance(samples, int) or not samples:
                 return changed
             for data, info in samples:
@@ -287,6 +301,17 @@ class GraphCache:
             if remote and elapsed >= minimum and now - self.changed >= quiet / 3 and self._described(nodes):
                 return remote
             time.sleep(0.05)
+
+    def spin(self, seconds: float) -> bool:
+        """Poll until `seconds` after discovery started, as ros2cli's --spin-time waits (a long-lived cache
+        only polls); True when any other participant was found."""
+        deadline = self.started + seconds
+        while True:
+            self.poll()
+            if self.long_lived or time.monotonic() >= deadline:
+                with self._lock:
+                    return any(key != self.own for key in self.participants)
+            time.sleep(min(0.05, max(0.0, deadline - time.monotonic())))
 
     def await_described(self, limit: float, nodes: bool = True) -> None:
         """Poll; then, for at most `limit` seconds, wait for participants seen within ENDPOINTS_GRACE to

@@ -45,10 +45,16 @@ _ANY_SAMPLE = 0x7F  # SampleState.Any | ViewState.Any | InstanceState.Any (DDS m
 
 
 class Ros2Graph(Ros2Base):
-    """The transport is one DDS participant (`Session`), started on first need."""
+    """The transport is one DDS participant (`Session`), started on first need, or `discovery`'s, started
+    before this module was even imported (backends.py)."""
+
+    def __init__(self, *args: Any, discovery: GraphCache | None = None, **kwargs: Any) -> None:
+        self._discovery = discovery
+        super().__init__(*args, **kwargs)
 
     def _prepare(self, distro: str | None) -> None:
         discovery_range()
+        self.spin_time: float | None = None  # --spin-time: a listing's discovery wait, as ros2cli's
         self.types = TypeSupport(distro or distro_from_env(), self.interface_paths)
         self._session: Session | None = None
         self._type_server: TypeDescriptionServer | None = None
@@ -58,7 +64,7 @@ class Ros2Graph(Ros2Base):
     def session(self) -> Session:
         with self._lock:
             if self._session is None:
-                self._session = Session(self._node_name, self.types)
+                self._session = Session(self._node_name, self.types, self._discovery)
             return self._session
 
     def _start(self) -> None:
@@ -71,16 +77,24 @@ class Ros2Graph(Ros2Base):
         if self._session is not None:
             self._session.close()
             self._session = None
+        elif self._discovery is not None:
+            self._discovery.participant.close()
+        self._discovery = None
 
     # --- discovery ----------------------------------------------------------------------------
     def _settled(self, require_peers: bool, nodes: bool = False) -> GraphCache:
         cache = self.session.cache
-        found = cache.settle(maximum=NODES_MAX_SECONDS if nodes else SETTLE_MAX_SECONDS, nodes=nodes)
+        window = SETTLE_MAX_SECONDS
+        if self.spin_time is not None:
+            window = self.spin_time
+            found = cache.spin(self.spin_time)
+        else:
+            found = cache.settle(maximum=NODES_MAX_SECONDS if nodes else SETTLE_MAX_SECONDS, nodes=nodes)
         if require_peers and self.require_peers and not found:
             participant = self.session.participant
             raise RostoolError(
                 f"no ROS 2 participants found on domain {participant.domain_id} within "
-                f"{SETTLE_MAX_SECONDS:g} s ({participant.range} discovery): is anything running with this "
+                f"{window:g} s ({participant.range} discovery): is anything running with this "
                 "ROS_DOMAIN_ID? Nodes on other machines need ROS_AUTOMATIC_DISCOVERY_RANGE=SUBNET"
             )
         return cache

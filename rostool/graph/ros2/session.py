@@ -25,14 +25,14 @@ from rostool.graph.ros2_base.qos import QosProfile
 class Session:
     """One DDS participant with rmw_dds_common's graph machinery."""
 
-    def __init__(self, node_name: str, types: TypeSupport) -> None:
+    def __init__(self, node_name: str, types: TypeSupport, cache: GraphCache | None = None) -> None:
         from cyclonedds.core import Policy, Qos
         from cyclonedds.pub import DataWriter
         from cyclonedds.sub import DataReader
         from cyclonedds.topic import Topic
 
         self.types = types
-        self.participant = dds.Participant()
+        self.participant = cache.participant if cache is not None else dds.Participant()
         self.node = NodeEntry("/", node_name)
         self._lock = threading.RLock()
         self._topics: dict[str, Any] = {}
@@ -47,7 +47,8 @@ class Session:
         self._info_reader = DataReader(
             self.participant.dp, info_topic, qos=Qos(*reader_qos.policies, Policy.IgnoreLocal.Participant)
         )
-        self.cache = GraphCache(self.participant, self._info_reader)
+        self.cache = cache if cache is not None else GraphCache(self.participant)
+        self.cache.info_reader = self._info_reader
         self.announce()
 
     def announce(self) -> None:
