@@ -16,6 +16,7 @@ from __future__ import annotations
 import argparse
 import os
 import shutil
+import subprocess
 import sys
 import tempfile
 from pathlib import Path
@@ -24,6 +25,13 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from bench_columnar import messages
 from bench_export_columnar import timed
+
+
+def peak_rss_mib(command: list[str], env: dict[str, str], cwd: Path) -> float:
+    """The largest resident set of the command's process tree (Linux: a waited-for child's maximum RSS
+    includes its own waited-for children's, so local workers count; Ray's workers are Ray's, not ours)."""
+    proc = subprocess.Popen(command, env=env, cwd=cwd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    return os.wait4(proc.pid, 0)[2].ru_maxrss / 1024
 
 
 def fleet(root: Path, msgtype: str, bags: int, count: int) -> Path:
@@ -52,8 +60,8 @@ def main() -> None:
     args = parser.parse_args()
     env = {k: v for k, v in os.environ.items() if not k.startswith("RAY_")}
     print(f"load average {os.getloadavg()[0]:.1f}, {os.cpu_count()} CPUs")
-    print("| fleet | messages | engine | wall s | CPU s (driver) | vs -j 1 (wall) |")
-    print("|---|---|---|---|---|---|")
+    print("| fleet | messages | engine | wall s | CPU s (driver) | vs -j 1 (wall) | peak RSS MiB |")
+    print("|---|---|---|---|---|---|---|")
     cases = [("Imu", "sensor_msgs/msg/Imu", args.imu), ("TFMessage", "tf2_msgs/msg/TFMessage", args.tf)]
     if args.single:
         args.bags, cases = 1, [("Imu, one bag", "sensor_msgs/msg/Imu", args.single)]
@@ -74,8 +82,10 @@ def main() -> None:
             ):
                 wall, cpu = timed(base + extra, env, args.runs, out, cwd=Path(tmp))
                 baseline = baseline or wall
+                shutil.rmtree(out, ignore_errors=True)
+                rss = peak_rss_mib(base + extra, env, Path(tmp))
                 row = f"| {label} x{args.bags} | {args.bags * count:,} | {engine} | {wall:.2f} | {cpu:.2f}"
-                print(f"{row} | {baseline / wall:.2f}x |")
+                print(f"{row} | {baseline / wall:.2f}x | {rss:.0f} |")
 
 
 if __name__ == "__main__":
