@@ -1,11 +1,12 @@
 """Listings through rostool's graph daemon beside the real `ros2` with its own warm daemon, on one graph of
 real rclpy nodes (>= 10 nodes, >= 40 topics, services, actions; Fast DDS on loopback), in one run.
 
-    .venv/bin/python bench/bench_daemon.py [--runs 20] [--cold 5] [--backend dds|rclpy]...
+    .venv/bin/python bench/bench_daemon.py [--runs 20] [--cold 5] [--backend dds|rclpy]... [--cold-only]
 
 Each call is a new process, as a user's shell runs it; calls of the two tools alternate, so a drift of the
 machine's speed touches both. `complete` counts the runs whose answer held every name the graph has.
 Cold: no daemon yet (it is stopped before each run): the call answers directly while it starts one.
+`--cold-only` measures only that (and the empty graph), not the warm calls.
 """
 
 from __future__ import annotations
@@ -101,13 +102,15 @@ def main() -> None:
     parser.add_argument("--runs", type=int, default=20)
     parser.add_argument("--cold", type=int, default=5)
     parser.add_argument("--backend", action="append", choices=("dds", "rclpy"))
+    parser.add_argument("--cold-only", action="store_true")
     args = parser.parse_args()
     backends = args.backend or ["dds", "rclpy"]
     scratch = Path(tempfile.mkdtemp(prefix="rtb"))
     run_dir = scratch / "run"
     run_dir.mkdir(mode=0o700)
+    # the build is pinned: a checkout edited during the run would otherwise have its daemons replaced
     env = {**ros2_env(), "ROSTOOL_NO_DAEMON": "", "XDG_RUNTIME_DIR": str(run_dir),
-           "XDG_STATE_HOME": str(scratch / "state")}  # fmt: skip
+           "XDG_STATE_HOME": str(scratch / "state"), "ROSTOOL_DAEMON_BUILD": "bench"}  # fmt: skip
     fast = peer_env(env, scratch)  # ros2's (and the rclpy backend's) environment: Fast DDS on loopback
     tools = {
         "dds": ([VENV_PYTHON, "-m", "rostool", "--ros2-backend", "dds"], env),
@@ -131,7 +134,7 @@ def main() -> None:
     try:
         all_nodes = verbs(expected)[1][1]
         print(f"ros2's daemon complete after {warmed([ROS2], fast, all_nodes):.1f} s")
-        for backend in backends:
+        for backend in [] if args.cold_only else backends:
             command, tool_env = tools[backend]
             print(f"rostool's {backend} daemon complete after {warmed(command, tool_env, all_nodes):.1f} s")
             print(f"\nwarm, {backend} backend: | verb | median | max | complete |")
@@ -148,18 +151,23 @@ def main() -> None:
                 print(row(f"rostool {' '.join(verb)}", ours, ours_ok), f" {ratio:.2f}x ros2")
                 print(row(f"ros2 {' '.join(verb)}", theirs, theirs_ok))
             print(at_once([*command, "topic", "list"], tool_env, expected["topic"], f"rostool ({backend})"))
-        print(at_once([ROS2, "topic", "list"], fast, expected["topic"], "ros2"))
+        if not args.cold_only:
+            print(at_once([ROS2, "topic", "list"], fast, expected["topic"], "ros2"))
         for backend in backends:
             command, tool_env = tools[backend]
-            cold, cold_ok = [], 0
-            for _ in range(args.cold):
-                subprocess.run([*command, "daemon", "stop"], env=tool_env, capture_output=True, timeout=60)
-                seconds, done = timed([*command, "topic", "list"], tool_env)
-                cold.append(seconds)
-                cold_ok += done.returncode == 0 and expected["topic"] <= set(done.stdout.split())
-            print(row(f"cold rostool topic list ({backend})", cold, cold_ok))
+            for verb, check in verbs(expected)[:2]:  # topic list, node list
+                cold, cold_ok = [], 0
+                for _ in range(args.cold):
+                    subprocess.run(
+                        [*command, "daemon", "stop"], env=tool_env, capture_output=True, timeout=60
+                    )
+                    seconds, done = timed([*command, *verb], tool_env)
+                    cold.append(seconds)
+                    cold_ok += done.returncode == 0 and check(done.stdout)
+                print(row(f"cold rostool {' '.join(verb)} ({backend})", cold, cold_ok))
         empty = {**env, **ros2_env()}
-        empty.update({k: env[k] for k in ("ROSTOOL_NO_DAEMON", "XDG_RUNTIME_DIR", "XDG_STATE_HOME")})
+        kept = ("ROSTOOL_NO_DAEMON", "XDG_RUNTIME_DIR", "XDG_STATE_HOME", "ROSTOOL_DAEMON_BUILD")
+        empty.update({k: env[k] for k in kept})
         command, _ = tools["dds"]
         subprocess.run([*command, "daemon", "start"], env=empty, check=True, capture_output=True, timeout=60)
         quiet, quiet_ok = [], 0

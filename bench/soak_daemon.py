@@ -33,11 +33,12 @@ SAMPLE = 5.0
 WARMUP = 30.0  # seconds before the first RSS counts (the daemon's first queries allocate once)
 
 CHURNER = r"""
-import json, sys, time
+import json, signal, sys, time
 import rclpy
 from std_msgs.msg import String
 from std_srvs.srv import Trigger
 period, alive = float(sys.argv[1]), int(sys.argv[2])
+signal.signal(signal.SIGTERM, lambda *_: sys.exit(0))
 up = []
 k = 0
 next_at = time.monotonic()
@@ -58,8 +59,10 @@ try:
             rclpy.shutdown(context=old_context)
         next_at += period
         time.sleep(max(0.0, next_at - time.monotonic()))
-except KeyboardInterrupt:
-    pass
+finally:
+    for context, node in up:
+        node.destroy_node()
+        rclpy.shutdown(context=context)
 """
 
 
@@ -106,8 +109,12 @@ def soak(backend: str, minutes: float, env: dict[str, str], scratch: Path) -> No
             if len(samples) % 12 == 0:
                 print(f"  {samples[-1][0]:6.0f} s: RSS {samples[-1][1] / 1024:.1f} MiB, {nodes} nodes")
     finally:
-        churner.send_signal(2)
-        churner.wait(timeout=10)
+        churner.terminate()  # rclpy keeps SIGINT for its contexts
+        try:
+            churner.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            churner.kill()
+            churner.wait()
         steady.stop()
         subprocess.run([*command, "daemon", "stop"], env=tool_env, capture_output=True, timeout=60)
     counted = [s for s in samples if s[0] >= WARMUP]
