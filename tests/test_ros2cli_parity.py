@@ -698,3 +698,36 @@ def test_liveliness_both_ways(graph: ParityGraph) -> None:
         if not (seen and all(line in shown for line in LEASE_LINES)):
             failed.append(f"{backend}: ros2 topic info -v of rostool's publisher:\n{shown}")
     assert not failed, "\n".join(failed)
+
+
+# --- param get NODE P1 P2 ...: Jazzy's ros2 takes one name; rostool prints several as ros2cli after Jazzy
+# does (each name, then Jazzy's line for it indented; --hide-type: `name: value`) -------------------------
+SEVERAL = ("count", "label", "blob", "gains", "flag")
+
+
+def test_param_get_several(graph: ParityGraph) -> None:
+    with ThreadPoolExecutor(4) as pool:
+        typed = list(pool.map(lambda p: graph.ros2(["param", "get", "/parity_server", p]), SEVERAL))
+        bare = list(
+            pool.map(lambda p: graph.ros2(["param", "get", "--hide-type", "/parity_server", p]), SEVERAL)
+        )
+    assert all(run.code == 0 for run in typed + bare), [run.stderr for run in typed + bare]
+    expected = "".join(f"{p}:\n  {run.stdout}" for p, run in zip(SEVERAL, typed, strict=True))
+    expected_bare = "".join(f"{p}: {run.stdout}" for p, run in zip(SEVERAL, bare, strict=True))
+    failed = []
+    for backend in BACKENDS:
+        for flags, want in (([], expected), (["--hide-type"], expected_bare)):
+            got = graph.rostool(backend, ["param", "get", *flags, "/parity_server", *SEVERAL])
+            if (got.code, got.stdout) != (0, want):
+                failed.append(
+                    f"{backend} {flags}: exit {got.code}\n{got.stdout}\nwanted:\n{want}{got.stderr}"
+                )
+        missing = graph.rostool(backend, ["param", "get", "/parity_server", "count", "parity_nope"])
+        if (
+            missing.code != 1
+            or missing.stdout
+            or missing.stderr_lines
+            != ["rostool: Parameter(s) 'parity_nope' not available on node /parity_server"]
+        ):
+            failed.append(f"{backend}: a missing name: exit {missing.code} {missing.stderr_lines}")
+    assert not failed, "\n".join(failed)
