@@ -49,6 +49,7 @@ from tests.parity_ros2cli import (
 from tests.support import ros2_env
 
 TALKER = ["--name", "parity_talker", "--talk", "/chatter", "--rate", "5", "--stamped", "/stamped"]
+HIDER = ["--name", "parity_hider", "--talk", "/_parity_hidden", "--rate", "2"]  # a hidden topic
 SERVER = ["--name", "parity_server", "--params", "--service", "/set_flag", "--action", "/fibonacci",
           "--step", "0.05", "--listen", "/chatter", "--listen", "/parity_pub"]  # fmt: skip
 
@@ -56,20 +57,21 @@ SERVER = ["--name", "parity_server", "--params", "--service", "/set_flag", "--ac
 def _ready(graph: ParityGraph) -> bool:
     """The daemon knows every node, topic endpoint, service and action of the module's graph."""
     checks = (
-        (["node", "list"], ("/parity_server\n", "/parity_talker\n")),
+        (["node", "list"], ("/parity_hider\n", "/parity_server\n", "/parity_talker\n")),
         (
             ["service", "list"],
             ("/set_flag\n", "/parity_server/set_parameters\n", "/parity_talker/get_parameters\n"),
         ),
         (["action", "list"], ("/fibonacci\n",)),
         (["topic", "list", "-v"], ("/chatter [std_msgs/msg/String] 1 subscriber", "/stamped [")),
+        (["topic", "list", "--include-hidden-topics"], ("/_parity_hidden\n",)),
     )
     return all(all(part in graph.ros2(args).stdout for part in parts) for args, parts in checks)
 
 
 @pytest.fixture(scope="module")
 def graph(tmp_path_factory: pytest.TempPathFactory) -> Iterator[ParityGraph]:
-    with parity_graph(tmp_path_factory.mktemp("parity"), [TALKER, SERVER], _ready) as made:
+    with parity_graph(tmp_path_factory.mktemp("parity"), [TALKER, SERVER, HIDER], _ready) as made:
         yield made
 
 
@@ -262,6 +264,20 @@ CASES = [
          "std_msgs/msg/String", "{data: hi}", normalize=subscription_wait),
     case("interface proto", "(unknown type)", "interface", "proto", "std_msgs/msg/ParityNope", error=True),
     case("interface package", "(unknown package)", "interface", "package", "parity_nopkg", error=True),
+    # --- facts of ros2cli's own tests (ros2topic, ros2service, ros2action test_cli.py) ---
+    case("topic echo", "--field (nested)", "topic", "echo", "--once", "--field", "header.stamp", "/stamped",
+         normalize=digits_zeroed),
+    case("topic echo", "--field (not a member)", "topic", "echo", "--once", "--field", "not_member",
+         "/stamped", error=True),
+    case("topic echo", "--field (no name)", "topic", "echo", "--once", "--field", ".", "/stamped",
+         error=True),
+    listing("topic find", "(not a type)", "topic", "find", "not_a_topic_typename"),
+    listing("topic type", "(hidden topic)", "topic", "type", "/_parity_hidden", error=True),
+    listing("service find", "(not a type)", "service", "find", "not_a_service_typename"),
+    case("service call", "(no request)", "service", "call", "/set_flag", "std_srvs/srv/SetBool",
+         normalize=service_wait),
+    case("action send_goal", "(not a goal field)", "action", "send_goal", "/fibonacci",
+         "test_msgs/action/Fibonacci", "{ordr: 3}", error=True),
     # --- QoS: history, liveliness, lease ---
     case("topic echo", "--qos-history", "topic", "echo", "--once", "--qos-history", "keep_all", "/chatter",
          normalize=digits_zeroed),
