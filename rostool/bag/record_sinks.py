@@ -24,6 +24,16 @@ from rostool.errors import RostoolError
 from rostool.graph.recording import RecordSource
 
 
+def _volatile(best_effort: bool) -> Any:
+    """A volatile publisher's offered QoS as rosbag2 stores it (rosbags' LATCH, but volatile): history and
+    depth unknown, as rmw reports a remote publisher's."""
+    from rosbags.convert.converter import LATCH
+    from rosbags.interfaces import QosDurability, QosReliability
+
+    reliability = QosReliability.BEST_EFFORT if best_effort else QosReliability.RELIABLE
+    return LATCH[0]._replace(reliability=reliability, durability=QosDurability.VOLATILE)
+
+
 def active_name(path: Path) -> Path:
     return path.with_name(path.name + ".active")
 
@@ -182,7 +192,8 @@ class Ros2Sink:
     def _add(self, header: Mapping[str, str]) -> tuple[Any, Callable[[bytes], Any]] | None:
         # Several publishers of one topic (/tf, /rosout) share its one connection: rosbags takes a
         # (topic, type, QoS) once.
-        same = (header.get("topic"), header.get("type"), header.get("md5sum"), header.get("latching") == "1")
+        same = (header.get("topic"), header.get("type"), header.get("md5sum"), header.get("latching") == "1",
+                header.get("reliability"))  # fmt: skip
         if same in self._shared:
             return self._shared[same]
         entry = self._add_connection(header)
@@ -198,6 +209,7 @@ class Ros2Sink:
         qos = list(LATCH) if header.get("latching") == "1" else []
         try:
             if self.source.encoding == "cdr":
+                qos = qos or [_volatile(header.get("reliability") == "best_effort")]
                 conn = self.writer.add_connection(
                     header["topic"], header["type"], typestore=self.source.store, offered_qos_profiles=qos
                 )

@@ -56,7 +56,9 @@ class Ros2Source:
         """The bag's view of the topic: its ROS 2 type and whether its publishers latch."""
         writers = [e for e in self.graph.topic_views(topic) if e.is_writer]
         latching = any(e.qos.durability == "transient_local" for e in writers)
-        return {"topic": topic, "type": str(origin), "callerid": "", "latching": "1" if latching else "0"}
+        best_effort = bool(writers) and all(e.qos.reliability == "best_effort" for e in writers)
+        return {"topic": topic, "type": str(origin), "callerid": "", "latching": "1" if latching else "0",
+                "reliability": "best_effort" if best_effort else "reliable"}  # fmt: skip
 
     def close(self) -> None:
         self.graph.close()
