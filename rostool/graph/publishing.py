@@ -16,7 +16,7 @@ from rostool.graph.base import Graph
 from rostool.interfaces.values import message_args
 
 ONCE_LATCH_SECONDS = 3.0
-MATCH_WAIT_SECONDS = 3.0  # ROS 2: how long a finite publication waits for the subscribers discovered
+MATCH_WAIT_SECONDS = 3.0  # ROS 2: how long a finite publication waits for the subscribers discovered to match
 
 
 def _file_messages(path: str) -> list[Any]:
@@ -80,12 +80,16 @@ def _linger(graph: Graph, publisher: Any, seconds: float) -> None:
 
 
 def _wait_for_known_subscribers(graph: Graph, publisher: Any, seconds: float) -> None:
-    deadline = time.monotonic() + seconds
+    """Wait for the event itself: every subscriber the graph knows of has matched this publisher (its
+    matched count). `seconds` bounds only that wait, counted once the graph has answered: a direct ROS 2
+    listing spends its own discovery time first, and a subscriber it lists still has to discover this
+    new publisher (Fast DDS: on its next announcement), so a window that included the listing ran out
+    before the match and the message went to nobody."""
     try:
         wanted = len(next((t.subscribers for t in graph.topics() if t.name == publisher.topic), []))
     except RostoolError:  # nobody else in the graph (ROS 2: no participant answered)
         return
-    publisher.wait_for_subscribers(wanted, max(0.0, deadline - time.monotonic()))
+    publisher.wait_for_subscribers(wanted, seconds)
 
 
 def _paced(period: float, total: int | None, publish: Callable[[int], None]) -> None:
