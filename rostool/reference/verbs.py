@@ -22,7 +22,7 @@ PLANNED_TREE: Mapping[str, frozenset[str] | None] = {
     "interface": frozenset({"list", "package", "packages", "proto", "show"}),
     "service": frozenset({"list", "type", "info", "uri", "find", "call", "echo"}),
     "action": frozenset({"list", "info", "type", "find", "send-goal", "send_goal", "cancel"}),
-    "bag": frozenset({"info", "play", "record", "convert", "echo", "filter", "reindex"}),
+    "bag": frozenset({"info", "play", "record", "convert", "echo", "filter", "reindex", "burst"}),
     "cheatsheet": None,
 }
 
