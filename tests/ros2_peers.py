@@ -9,10 +9,15 @@ profile's transports and bind the other interfaces). `RclpyPeer.stop` checks the
 
 from __future__ import annotations
 
+import contextlib
+import fcntl
 import json
 import os
 import re
+import shutil
+import signal
 import subprocess
+import tempfile
 import threading
 import time
 from collections.abc import Callable, Iterator
@@ -21,7 +26,7 @@ from typing import Any
 
 import pytest
 
-from tests.support import IN_CI, ros2_env
+from tests.support import IN_CI, ros2_env, rostool, rostool_popen
 
 DISTROS = ("jazzy", "kilted")
 PEER_SCRIPT = Path(__file__).resolve().parent / "rclpy_peer.py"
@@ -185,6 +190,65 @@ def distro(request: pytest.FixtureRequest) -> str:
 def graph_env() -> dict[str, str]:
     """rostool's environment for one test's ROS 2 graph (its own domain, loopback only)."""
     return ros2_env()
+
+
+class WarmDaemon:
+    """rostool's graph daemon for one test's graph, as a user runs every verb by default: `env` is the
+    test's environment with the daemon allowed, in a runtime directory of its own (a short path: a Unix
+    socket's is limited to 107 bytes). The daemon starts at once and discovers while the peers start;
+    `ready()` waits until it answers, so that every listing of the test is served warm."""
+
+    def __init__(self, env: dict[str, str]) -> None:
+        self.run_dir = Path(tempfile.mkdtemp(prefix="rtw"))
+        self.env = {**env, "ROSTOOL_NO_DAEMON": "", "XDG_RUNTIME_DIR": str(self.run_dir),
+                    "XDG_STATE_HOME": str(self.run_dir / "state")}  # fmt: skip
+        self._starting: subprocess.Popen[str] | None = rostool_popen(["--ros2", "daemon", "start"], self.env)
+
+    def ready(self) -> None:
+        if self._starting is None:
+            return
+        out, err = self._starting.communicate(timeout=60)
+        self._starting = None
+        assert "The daemon has been started" in out or "already running" in out, f"daemon start: {out}{err}"
+
+    def graph_size(self) -> dict[str, int]:
+        """What the daemon holds now (`daemon status --json`'s graph: nodes, topics, services, actions)."""
+        done = rostool(["--ros2", "daemon", "status", "--json"], self.env)
+        assert done.returncode == 0, done.stderr
+        return dict(json.loads(done.stdout)["graph"])
+
+    def held_locks(self) -> list[int]:
+        """The pids of daemons still holding a lock in the runtime directory."""
+        held = []
+        for lock in self.run_dir.glob("rostool/*.lock"):
+            with open(lock, encoding="utf-8") as handle:
+                try:
+                    fcntl.flock(handle, fcntl.LOCK_SH | fcntl.LOCK_NB)
+                except BlockingIOError:
+                    text = handle.read().strip()
+                    held.append(int(text) if text.isdigit() else -1)
+        return held
+
+    def stop(self) -> list[int]:
+        """Stop every daemon of the runtime directory; the pids that had to be killed."""
+        if self._starting is not None:
+            self._starting.wait(timeout=60)
+        rostool(["daemon", "stop", "--all"], self.env)
+        left = [pid for pid in self.held_locks() if pid > 0]
+        for pid in left:
+            with contextlib.suppress(ProcessLookupError):
+                os.kill(pid, signal.SIGKILL)
+        shutil.rmtree(self.run_dir, ignore_errors=True)
+        return left
+
+
+@pytest.fixture
+def warm_daemon(graph_env: dict[str, str]) -> Iterator[WarmDaemon]:
+    """The test's graph served by a graph daemon of its own (see WarmDaemon), stopped at the end."""
+    daemon = WarmDaemon(graph_env)
+    yield daemon
+    left = daemon.stop()
+    assert not left, f"graph daemons still running after `daemon stop --all`: {left}"
 
 
 @pytest.fixture

@@ -17,7 +17,7 @@ from typing import Any
 
 import pytest
 
-from tests.ros2_peers import RclpyPeer
+from tests.ros2_peers import RclpyPeer, WarmDaemon
 from tests.support import Watched, rostool, rostool_popen, stop, wait_until
 
 Start = Callable[..., RclpyPeer]
@@ -59,7 +59,7 @@ def first_doc(out: str) -> list[str]:
 
 
 @pytest.fixture
-def fixture_graph(graph_env: dict[str, str], start_peer: Start) -> dict[str, RclpyPeer]:
+def fixture_graph(warm_daemon: WarmDaemon, start_peer: Start) -> dict[str, RclpyPeer]:
     peers = {
         "talker": start_peer("--name", "talker", "--hello", "/chatter"),
         "listener": start_peer("--name", "listener", "--listen", "/chit_chatter"),
@@ -68,12 +68,20 @@ def fixture_graph(graph_env: dict[str, str], start_peer: Start) -> dict[str, Rcl
             "--name", "repeater", *[a for r in REPEATS for a in ("--repeat", r)], "--cmd-vel", "/cmd_vel"
         ),
     }
-    time.sleep(1.0)
+    warm_daemon.ready()
+    # the daemon knows every peer's node (the listing cases check names, and nodes come after endpoints)
+    assert wait_until(lambda: warm_daemon.graph_size()["nodes"] == len(peers), timeout=20)
     return peers
 
 
-def test_topic_list_info_type_find(graph_env: dict[str, str], fixture_graph: dict[str, RclpyPeer]) -> None:
-    env, c = graph_env, Cases()
+@pytest.fixture
+def served_env(warm_daemon: WarmDaemon) -> dict[str, str]:
+    """The test's ROS 2 environment with its listings served by its warm graph daemon."""
+    return warm_daemon.env
+
+
+def test_topic_list_info_type_find(served_env: dict[str, str], fixture_graph: dict[str, RclpyPeer]) -> None:
+    env, c = served_env, Cases()
     out = ros2(env, "topic", "list").stdout
     c.check("test_list_topics", out.splitlines() == TOPICS, out)
     for flags, case in ((["--include-hidden-topics"], "test_list_all_topics"), (["-a"], "test_list_a_alias"),
@@ -116,8 +124,8 @@ def test_topic_list_info_type_find(graph_env: dict[str, str], fixture_graph: dic
     c.done()
 
 
-def test_topic_echo_forms(graph_env: dict[str, str], fixture_graph: dict[str, RclpyPeer]) -> None:
-    env, c = graph_env, Cases()
+def test_topic_echo_forms(served_env: dict[str, str], fixture_graph: dict[str, RclpyPeer]) -> None:
+    env, c = served_env, Cases()
 
     def echo(*args: str) -> Any:
         return ros2(env, "topic", "echo", "--once", *args, timeout=20)
@@ -202,8 +210,8 @@ def test_topic_echo_forms(graph_env: dict[str, str], fixture_graph: dict[str, Rc
     c.done()
 
 
-def test_topic_pub_forms(graph_env: dict[str, str], fixture_graph: dict[str, RclpyPeer]) -> None:
-    env, c, listener = graph_env, Cases(), fixture_graph["listener"]
+def test_topic_pub_forms(served_env: dict[str, str], fixture_graph: dict[str, RclpyPeer]) -> None:
+    env, c, listener = served_env, Cases(), fixture_graph["listener"]
     qos = ["--qos-durability", "transient_local", "--qos-reliability", "reliable"]
     proc = rostool_popen(["--ros2", "topic", "pub", "--keep-alive", "3", *qos, "/chit_chatter", "std_msgs/msg/String",
                           "{data: foo}"], env)  # fmt: skip
@@ -260,8 +268,8 @@ def test_topic_pub_forms(graph_env: dict[str, str], fixture_graph: dict[str, Rcl
 
 
 @pytest.mark.alone  # hz within 2 % of a 1 Hz timer: a loaded machine delays the timer
-def test_topic_rates(graph_env: dict[str, str], fixture_graph: dict[str, RclpyPeer]) -> None:
-    env, c = graph_env, Cases()
+def test_topic_rates(served_env: dict[str, str], fixture_graph: dict[str, RclpyPeer]) -> None:
+    env, c = served_env, Cases()
     out = ros2(env, "topic", "delay", "/cmd_vel", "--duration", "4.5").stdout.splitlines()
     m = re.fullmatch(r"average delay: (\d+\.\d{3})", out[0]) if out else None
     c.check(
@@ -296,8 +304,8 @@ def test_topic_rates(graph_env: dict[str, str], fixture_graph: dict[str, RclpyPe
     c.done()
 
 
-def test_node_list_and_info(graph_env: dict[str, str], fixture_graph: dict[str, RclpyPeer]) -> None:
-    env, c = graph_env, Cases()
+def test_node_list_and_info(served_env: dict[str, str], fixture_graph: dict[str, RclpyPeer]) -> None:
+    env, c = served_env, Cases()
     visible = ["/listener", "/repeater", "/talker"]
     out = ros2(env, "node", "list").stdout.splitlines()
     c.check("test_list_nodes", out == visible, out)

@@ -15,13 +15,13 @@ from __future__ import annotations
 
 import re
 import subprocess
-import time
+from collections.abc import Iterator
 from typing import Any
 
 import pytest
 
-from tests.ros2_peers import PEERS_DIR, RclpyPeer, peer_python
-from tests.support import Watched, rostool, rostool_popen
+from tests.ros2_peers import PEERS_DIR, RclpyPeer, WarmDaemon, peer_python
+from tests.support import Watched, rostool, rostool_popen, wait_until
 from tests.test_ros2cli_forms import Cases, Start
 
 PARAMETER_SERVICES = 6
@@ -52,12 +52,23 @@ def service_env(graph_env: dict[str, str], distro: str) -> dict[str, str]:
 
 
 @pytest.fixture
-def echo_servers(start_peer: Start) -> list[RclpyPeer]:
+def service_daemon(service_env: dict[str, str]) -> Iterator[WarmDaemon]:
+    """A warm graph daemon of service_env's own (its key includes AMENT_PREFIX_PATH), stopped at the end."""
+    daemon = WarmDaemon(service_env)
+    yield daemon
+    left = daemon.stop()
+    assert not left, f"graph daemons still running after `daemon stop --all`: {left}"
+
+
+@pytest.fixture
+def echo_servers(service_daemon: WarmDaemon, start_peer: Start) -> list[RclpyPeer]:
     peers = [
         start_peer("--name", "echo_server", "--namespace", "/my_ns", "--echo-service", "echo"),
         start_peer("--name", "_hidden_echo_server", "--namespace", "/my_ns", "--echo-service", "_echo"),
     ]
-    time.sleep(1.0)
+    service_daemon.ready()
+    # the daemon knows both servers' nodes (names come after the endpoints)
+    assert wait_until(lambda: service_daemon.graph_size()["nodes"] == len(peers), timeout=20)
     return peers
 
 
@@ -82,8 +93,8 @@ def lines_match(lines: list[str], expected: list[Any]) -> bool:
 
 
 @pytest.mark.parametrize("distro", ["jazzy"])
-def test_service_cases(distro: str, service_env: dict[str, str], echo_servers: list[RclpyPeer]) -> None:
-    env, c = service_env, Cases()
+def test_service_cases(distro: str, service_daemon: WarmDaemon, echo_servers: list[RclpyPeer]) -> None:
+    env, c = service_daemon.env, Cases()
     out = ros2(env, "service", "list").stdout.splitlines()
     c.check(
         "test_list_services", lines_match(out, ["/my_ns/echo", *node_services("/my_ns/echo_server")]), out
@@ -193,9 +204,11 @@ def in_order(expected: list[Any], lines: list[str]) -> bool:
 
 
 @pytest.mark.parametrize("distro", ["kilted"])
-def test_action_cases(graph_env: dict[str, str], start_peer: Start) -> None:
-    env, c = graph_env, Cases()
+def test_action_cases(warm_daemon: WarmDaemon, start_peer: Start) -> None:
+    env, c = warm_daemon.env, Cases()
     start_peer("--name", "fibonacci_action_server", "--action", "/fibonacci")
+    warm_daemon.ready()
+    assert wait_until(lambda: warm_daemon.graph_size()["actions"] == 1, timeout=20)
     got = ros2(env, "action", "info", "/not_an_action")
     # ros2cli exits 0; rostool prints the same lines, then its error line, and exits 1 (its rule)
     c.check("test_info_on_nonexistent_action (exit 1 by rule)", got.returncode == 1 and got.stdout.splitlines()
