@@ -287,7 +287,7 @@ def test_spin_time_is_the_direct_listings_discovery_wait(
     assert listing.returncode == 0 and "/late_spin" in out.split(), err
     # a running daemon answers: --spin-time only applies without one (ros2cli's words)
     assert tool(["daemon", "start"], timeout=60).returncode == 0
-    served = tool(["topic", "list", "--spin-time", "30"], timeout=20)
+    served = tool(["topic", "list", "--spin-time", "90"], timeout=60)  # a direct answer would take 90 s
     assert served.returncode == 0 and "/late_spin" in served.stdout.split(), served.stderr
 
 

@@ -83,8 +83,13 @@ class DaemonClient:
             raise DaemonSilent("an answer without a value")
         return answer["ok"]
 
-    def query(self, method: str, args: list[Any]) -> Any:
-        return self.request({"op": "query", "build": self.build, "method": method, "args": args})
+    def query(self, method: str, args: list[Any], own: bytes | None = None) -> Any:
+        """A Graph method's answer; `own`: the asking process's participant, which the daemon need not wait
+        for to describe itself."""
+        message = {"op": "query", "build": self.build, "method": method, "args": args}
+        if own is not None:
+            message["own"] = own.hex()
+        return self.request(message)
 
     def _connect(self) -> socket.socket:
         path = self.place.socket

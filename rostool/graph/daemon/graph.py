@@ -12,6 +12,7 @@ import sys
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, Literal
 
+from rostool.errors import RostoolError
 from rostool.graph.daemon.client import DaemonAbsent, DaemonClient, DaemonSilent, OtherBuild
 from rostool.graph.daemon.place import PlaceRefused
 from rostool.graph.daemon.queries import SERVED
@@ -71,11 +72,21 @@ class DaemonGraph:
     def resolve(self, name: str) -> str:
         return resolve(name)
 
+    def publisher(self, topic: str, type_name: str, latch: bool = False) -> Any:
+        """The direct graph's publisher; the topic's type, which it must not contradict, is the daemon's."""
+        resolved = resolve(topic)
+        try:
+            existing = next((info.type for info in self.topics() if info.name == resolved), None)
+        except RostoolError:  # nobody else in the graph
+            existing = None
+        return self.direct.publisher(topic, type_name, latch, existing)  # type: ignore[call-arg]
+
     # --- queries ---------------------------------------------------------------------------------
     def _ask(self, method: str, *args: Any) -> Any:
         if not self._bypass:
             try:
-                return SERVED[method][1](self._client.query(method, list(args)))
+                own = getattr(self._direct, "participant_guid", None) if self._direct is not None else None
+                return SERVED[method][1](self._client.query(method, list(args), own))
             except DaemonAbsent:
                 # the direct graph's discovery first: the daemon's start-up would otherwise take the CPU
                 # this process needs to start its own participant

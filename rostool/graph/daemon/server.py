@@ -79,7 +79,7 @@ class Daemon:
             return {"error": f"graph daemon: {method!r} is not a query it answers"}
         try:
             with self.graph_lock:
-                self.graph.wait_for_newcomers()
+                self.graph.wait_for_newcomers(ignore=_guid(request.get("own")))
                 return {"ok": served[0](getattr(self.graph, str(method))(*args))}
         except RostoolError as err:
             return {"error": str(err)}
@@ -154,6 +154,14 @@ class Daemon:
         if self.graph is not None:
             with contextlib.suppress(Exception):
                 self.graph.close()
+
+
+def _guid(text: Any) -> bytes | None:
+    """The asking client's own participant GUID (hex), which the daemon need not wait for."""
+    try:
+        return bytes.fromhex(text) if isinstance(text, str) else None
+    except ValueError:
+        return None
 
 
 def bind(path: Path) -> socket.socket:

@@ -1,6 +1,7 @@
 """Messages on the daemon's socket: a 4-byte big-endian length, then that many bytes of UTF-8 JSON.
 
-Requests: {"op": "query", "build": B, "method": M, "args": [...]}, {"op": "status"}, {"op": "stop"}.
+Requests: {"op": "query", "build": B, "method": M, "args": [...], "own": GUID (hex, optional: the client's
+participant)}, {"op": "status"}, {"op": "stop"}.
 Answers: {"ok": value}, {"error": "one line"} (a RostoolError the backend raised) or {"build": B} when
 the daemon is of another build than the client (it then stops, to be replaced).
 """

@@ -165,7 +165,7 @@ class RclpyGraph(Ros2Base):
         self.settle()
         self._long_lived = True
 
-    def wait_for_newcomers(self, limit: float = 1.0) -> None:
+    def wait_for_newcomers(self, limit: float = 1.0, ignore: bytes | None = None) -> None:
         """rmw folds in what discovery brings on its own threads: nothing to wait for."""
 
     @staticmethod

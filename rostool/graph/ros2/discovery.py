@@ -313,16 +313,17 @@ class GraphCache:
                     return any(key != self.own for key in self.participants)
             time.sleep(min(0.05, max(0.0, deadline - time.monotonic())))
 
-    def await_described(self, limit: float, nodes: bool = True) -> None:
+    def await_described(self, limit: float, nodes: bool = True, ignore: bytes | None = None) -> None:
         """Poll; then, for at most `limit` seconds, wait for participants seen within ENDPOINTS_GRACE to
-        describe themselves (a long-lived cache's `settle`)."""
+        describe themselves (a long-lived cache's `settle`), but `ignore` (the asking process's own, which
+        describes itself only once it needs to)."""
         deadline = time.monotonic() + limit
         self.poll()
-        while time.monotonic() < deadline and not self._described(nodes):
+        while time.monotonic() < deadline and not self._described(nodes, ignore):
             time.sleep(0.02)
             self.poll()
 
-    def _described(self, nodes: bool) -> bool:
+    def _described(self, nodes: bool, ignore: bytes | None = None) -> bool:
         """Every ROS 2 participant has both a reader and a writer (rmw creates ros_discovery_info's pair
         before any node), so one that shows only one kind yet is still being described; a bare DDS
         participant is waited for at most ENDPOINTS_GRACE seconds."""
@@ -335,7 +336,8 @@ class GraphCache:
                     announcers.add(endpoint.participant)
             now = time.monotonic()
             for participant in self.participants:
-                if participant == self.own or now - self.first_seen.get(participant, now) > ENDPOINTS_GRACE:
+                age = now - self.first_seen.get(participant, now)
+                if participant in (self.own, ignore) or age > ENDPOINTS_GRACE:
                     continue
                 if len(kinds.get(participant, ())) < 2:
                     return False

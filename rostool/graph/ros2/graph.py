@@ -108,10 +108,18 @@ class Ros2Graph(Ros2Base):
         cache.settle(maximum=NODES_MAX_SECONDS, nodes=True)
         cache.long_lived = True
 
-    def wait_for_newcomers(self, limit: float = 1.0) -> None:
+    def wait_for_newcomers(self, limit: float = 1.0, ignore: bytes | None = None) -> None:
         """Fold in what discovery brought, waiting (at most `limit`) for participants that appeared a
-        moment ago to describe their endpoints and nodes."""
-        self.session.cache.await_described(limit)
+        moment ago to describe their endpoints and nodes, but `ignore` (the asking client's)."""
+        self.session.cache.await_described(limit, ignore=ignore)
+
+    @property
+    def participant_guid(self) -> bytes | None:
+        """This process's DDS participant, once started (the daemon does not wait for it to describe
+        itself)."""
+        if self._session is not None:
+            return self._session.participant.guid
+        return self._discovery.participant.guid if self._discovery is not None else None
 
     def _view(self, endpoint: Endpoint, owners: dict[bytes, str]) -> EndpointView:
         return EndpointView(
@@ -129,6 +137,7 @@ class Ros2Graph(Ros2Base):
 
     def topic_views(self, topic: str) -> list[EndpointView]:
         cache = self.session.cache
+        cache.poll()
         owners = cache.node_of()
         endpoints = [e for e in cache.remote_endpoints() if e.ros == ("topic", topic)]
         return [self._view(e, owners) for e in sorted(endpoints, key=lambda e: not e.is_writer)]

@@ -239,10 +239,16 @@ class Ros2Base:
         self._subscriptions.append(sub)
         return sub
 
-    def publisher(self, topic: str, type_name: str, latch: bool = False) -> Ros2Publisher:
+    def publisher(
+        self, topic: str, type_name: str, latch: bool = False, existing: str | None = None
+    ) -> Ros2Publisher:
+        """A publisher of `type_name`, refused when the topic has another type: `existing` (a graph
+        daemon's answer), else whatever discovery knows at once (publishing never waits for a settle)."""
         resolved = resolve(topic)
         store_name = self.store_name(type_name)
-        existing = self.topic_type(resolved)
+        if existing is None:
+            views = self.topic_views(resolved)
+            existing = views[0].type_name if views else None
         if existing and existing != store_name:
             raise RostoolError(
                 f"topic {resolved} already has type {existing}; cannot publish {store_name} on it"
