@@ -79,17 +79,18 @@ def _linger(graph: Graph, publisher: Any, seconds: float) -> None:
     time.sleep(max(0.0, deadline - time.monotonic()))
 
 
-def _wait_for_known_subscribers(graph: Graph, publisher: Any, seconds: float) -> None:
+def _wait_for_known_subscribers(graph: Graph, publisher: Any, seconds: float, least: int = 0) -> None:
     """Wait for the event itself: every subscriber the graph knows of has matched this publisher (its
     matched count). `seconds` bounds only that wait, counted once the graph has answered: a direct ROS 2
     listing spends its own discovery time first, and a subscriber it lists still has to discover this
     new publisher (Fast DDS: on its next announcement), so a window that included the listing ran out
-    before the match and the message went to nobody."""
+    before the match and the message went to nobody. `least`: wait for at least that many matches even
+    when the graph lists fewer."""
     try:
         wanted = len(next((t.subscribers for t in graph.topics() if t.name == publisher.topic), []))
-    except RostoolError:  # nobody else in the graph (ROS 2: no participant answered)
+    except RostoolError:  # nobody else in the graph (ROS 2: no participant answered in its window)
         return
-    publisher.wait_for_subscribers(wanted, seconds)
+    publisher.wait_for_subscribers(max(wanted, least), seconds)
 
 
 def _paced(period: float, total: int | None, publish: Callable[[int], None]) -> None:
@@ -142,8 +143,12 @@ def publish_ros2(
             say(f"Waiting for at least {plan.wait_matching} matching subscription(s)...")
             wait = 1.0
     elif plan.total is not None:
-        # a volatile subscriber gets nothing published before it matched: wait for the ones discovery shows
-        _wait_for_known_subscribers(graph, publisher, MATCH_WAIT_SECONDS)
+        # a volatile subscriber gets nothing published before it matched: wait for the ones the graph
+        # knows and, as ros2 topic pub -1/-t does, for at least one (a direct listing may not know of a
+        # subscriber yet) unless -w 0 said not to
+        least = 0 if plan.wait_matching == 0 else 1
+        seconds = MATCH_WAIT_SECONDS if plan.max_wait is None else min(plan.max_wait, MATCH_WAIT_SECONDS)
+        _wait_for_known_subscribers(graph, publisher, seconds, least)
     if on_sent is not None:
         say("publisher: beginning loop")
 
