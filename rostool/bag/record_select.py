@@ -45,6 +45,7 @@ class TopicRules:
     exclude_types: frozenset[str]
     exclude_services: frozenset[str]  # their event topics
     hidden: bool
+    ignore_leaf: bool = False  # --ignore-leaf-topics: not while no one subscribes (asked again later)
 
 
 def services_events(names: Iterable[str]) -> frozenset[str]:
@@ -103,5 +104,15 @@ class TopicSelector:
         if type_name in r.exclude_types:
             return False
         if r.all_topics or topic in r.topics or type_name in r.topic_types:
+            return None if r.ignore_leaf and self._leaf(topic) else True
+        if r.regex is not None and r.regex.search(topic):
+            return None if r.ignore_leaf and self._leaf(topic) else True
+        return False
+
+    def _leaf(self, topic: str) -> bool:
+        """No subscription in the graph (rosbag2's leaf topic)."""
+        try:
+            rows = self.graph.topic_endpoints(topic) if self.graph is not None else []
+        except RostoolError:
             return True
-        return bool(r.regex is not None and r.regex.search(topic))
+        return not any(row["endpoint_type"] == "SUBSCRIPTION" for row in rows)

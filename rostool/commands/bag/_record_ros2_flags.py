@@ -13,7 +13,7 @@ from rostool.errors import RostoolError
 from rostool.graph.qos import QosRequest
 
 UNSUPPORTED = (
-    "snapshot_mode", "ignore_leaf_topics", "static_topics_path", "storage_preset_profile",
+    "snapshot_mode", "static_topics_path", "storage_preset_profile",
     "storage_config_file",
 )  # fmt: skip
 
@@ -155,4 +155,5 @@ def topic_rules(flags: RecordFlags) -> TopicRules:
         exclude_types=frozenset(topic_list(flags.exclude_topic_types)),
         exclude_services=services_events(topic_list(flags.exclude_services)),
         hidden=flags.include_hidden_topics,
+        ignore_leaf=flags.ignore_leaf_topics,
     )

@@ -103,7 +103,8 @@ RECORD_LISTS = (
 @click.option("--start-paused", is_flag=True,
               help="Start paused: nothing is recorded until SPACE (or SIGUSR1) resumes.")  # fmt: skip
 @click.option("--snapshot-mode", is_flag=True, help="Not supported yet (refused in one line).")
-@click.option("--ignore-leaf-topics", is_flag=True, help="Not supported yet (refused in one line).")
+@click.option("--ignore-leaf-topics", is_flag=True,
+              help="Leave out discovered topics no one subscribes to (until someone does).")  # fmt: skip
 @click.option("--static-topics-path", metavar="FILE", help="Not supported yet (refused in one line).")
 @click.option("--storage-preset-profile", metavar="PROFILE", help="Not supported yet (refused in one line).")
 @click.option("--storage-config-file", metavar="FILE", help="Not supported yet (refused in one line).")
