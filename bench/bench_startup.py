@@ -81,7 +81,7 @@ def main() -> None:
     parser.add_argument("--runs", type=int, default=5)
     parser.add_argument("--backend", action="append", choices=("dds", "rclpy"))
     parser.add_argument("--daemon", action="store_true", help="rostool through its warm graph daemon")
-    parser.add_argument("--what", action="append", choices=("echo", "pub", "record"))
+    parser.add_argument("--what", action="append", choices=("echo", "pub", "record", "phases", "linger"))
     args = parser.parse_args()
     backends = args.backend or ["dds", "rclpy"]
     what = args.what or ["echo", "pub", "record"]
@@ -118,6 +118,10 @@ def main() -> None:
             bench_pub(tools, args.runs, listener)
         if "record" in what:
             bench_record(tools, args.runs, scratch)
+        if "phases" in what:
+            bench_phases(tools, args.runs)
+        if "linger" in what:
+            bench_linger(args.distro, env, scratch, args.runs)
     finally:
         stop = [VENV_PYTHON, "-m", "rostool", "daemon", "stop", "--all"]
         subprocess.run(stop, env=env, capture_output=True, timeout=60)
@@ -172,6 +176,85 @@ def bench_record(tools: list[Tool], runs: int, scratch: Path) -> None:
             kept.setdefault(f"{label} topic echo /t", []).append(_count_lines(out, "data: hello"))
     for label, values in sorted(kept.items(), key=_record_order):
         print(row(f"{label}, {RECORD_SECONDS:g} s of 10 Hz", values, unit="msgs"))
+
+
+# One fresh process: seconds from its start to each step of a subscription, from inside (no daemon).
+PHASES = r"""
+import sys, threading, time
+start = time.perf_counter()
+from rostool.graph import open_graph
+imported = time.perf_counter()
+graph = open_graph(2, "rostool", (), sys.argv[1], use_daemon=False)
+opened = time.perf_counter()
+got, seen = threading.Event(), []
+graph.subscribe("/t", lambda m: got.set(), print)
+while not seen and not got.is_set():
+    graph.wait_for_newcomers(0.0)
+    if any(v.is_writer for v in graph.topic_views("/t")):
+        seen.append(time.perf_counter())
+    time.sleep(0.002)
+got.wait(30)
+first = time.perf_counter()
+graph.close()
+print(imported - start, opened - start, (seen or [first])[0] - start, first - start)
+"""
+
+
+def bench_phases(tools: list[Tool], runs: int) -> None:
+    """Where an echo's time goes inside the process (interpreter start not included)."""
+    steps = ("import rostool.graph", "graph opened", "publisher discovered", "first message")
+    for label, command, env in tools:
+        if not label.startswith("rostool"):
+            continue
+        found: list[list[float]] = [[] for _ in steps]
+        for _ in range(runs):
+            done = subprocess.run([command[0], "-c", PHASES, command[-1]], env=env, capture_output=True,
+                                  text=True, timeout=60)  # fmt: skip
+            values = [float(v) for v in done.stdout.split()[-4:]] if done.returncode == 0 else []
+            for column, value in zip(found, values, strict=False):
+                column.append(value)
+        for step, values in zip(steps, found, strict=True):
+            print(row(f"{label}: in-process, {step} after", values))
+
+
+NO_KEYHASH = (
+    '<CycloneDDS><Domain Id="any"><Internal><GenerateKeyhash>false</GenerateKeyhash></Internal></Domain>'
+    "</CycloneDDS>"
+)
+
+
+def bench_linger(distro: str, env: dict[str, str], scratch: Path, runs: int) -> None:
+    """How long a DDS-backend rostool's reader stays in a real node's graph view after rostool exited
+    (Ctrl+C), as rostool configures Cyclone and with Cyclone's default of no key hashes."""
+    watcher = RclpyPeer(distro, env, scratch, ["--name", "watcher", "--watch"])
+    watcher.wait_for("ready", timeout=60)
+
+    def seen() -> bool:
+        views = watcher.of("graph")
+        return bool(views and views[-1]["subscribers"].get("/t"))
+
+    try:
+        for label, extra in (("as configured", {}), ("without key hashes", {"CYCLONEDDS_URI": NO_KEYHASH})):
+            gone: list[float] = []
+            for _ in range(runs):
+                proc = subprocess.Popen([VENV_PYTHON, "-m", "rostool", "--ros2", "topic", "echo", "/t"],
+                                        env={**env, **extra}, stdout=subprocess.DEVNULL,
+                                        stderr=subprocess.DEVNULL)  # fmt: skip
+                deadline = time.monotonic() + 30
+                while not seen() and time.monotonic() < deadline:
+                    time.sleep(0.05)
+                proc.send_signal(signal.SIGINT)
+                proc.wait(timeout=30)
+                exited = time.monotonic()
+                while seen() and time.monotonic() - exited < 30:
+                    time.sleep(0.05)
+                gone.append(time.monotonic() - exited)
+            print(row(f"rostool dds reader gone from a real node's view after exit, {label}", gone,
+                      extra="the node reports every 0.5 s"))  # fmt: skip
+    finally:
+        addresses = watcher.bound_addresses()
+        watcher.stop()
+        assert_loopback_only(addresses)
 
 
 def _count_lines(out: str, prefix: str) -> int:
