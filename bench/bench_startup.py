@@ -91,13 +91,16 @@ def main() -> None:
     env = {**ros2_env(), "XDG_RUNTIME_DIR": str(run_dir), "XDG_STATE_HOME": str(scratch / "state")}
     env["ROSTOOL_NO_DAEMON"] = "" if args.daemon else "1"
     fast = peer_env(env, scratch)  # ros2's (and the rclpy backend's) environment: Fast DDS on loopback
-    ros2 = str(PEERS_DIR / args.distro / "bin" / "ros2")
+    ros2_dir = next(
+        PEERS_DIR / d / "bin" for d in (args.distro, "jazzy") if (PEERS_DIR / d / "bin" / "ros2").exists()
+    )
+    ros2 = str(ros2_dir / "ros2")  # the peer venvs install the real ros2 for Jazzy only
     tools: list[Tool] = []
     for backend in backends:
         python = VENV_PYTHON if backend == "dds" else str(PEERS_DIR / args.distro / "bin" / "python")
         command = [python, "-m", "rostool", "--ros2", "--ros2-backend", backend]
         tools.append((f"rostool {backend}", command, env if backend == "dds" else fast))
-    tools.append(("ros2", [ros2], fast))
+    tools.append((f"ros2 ({ros2_dir.parent.name})", [ros2], fast))
     print(f"{args.distro} peers (rclpy, Fast DDS, loopback); rostool {'with' if args.daemon else 'without'} "
           f"its daemon; load average at start {os.getloadavg()[0]:.1f}")  # fmt: skip
     subprocess.run([ros2, "daemon", "start"], env=fast, capture_output=True, timeout=60)
