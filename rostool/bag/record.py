@@ -97,6 +97,29 @@ class _Queue:
         return batch
 
 
+class _Ring:
+    """Snapshot mode's buffer: the newest messages, at most `limit` bytes and `span_ns` of receive time."""
+
+    def __init__(self, limit: int, span_ns: int) -> None:
+        self.items: collections.deque[tuple[str, Any, int, bytes]] = collections.deque()
+        self.bytes = 0
+        self.limit = limit
+        self.span_ns = span_ns
+
+    def add(self, item: tuple[str, Any, int, bytes]) -> None:
+        items = self.items
+        items.append(item)
+        self.bytes += len(item[3])
+        while items and (self.bytes > self.limit or (self.span_ns and item[2] - items[0][2] > self.span_ns)):
+            self.bytes -= len(items.popleft()[3])
+
+    def take(self) -> list[tuple[str, Any, int, bytes]]:
+        taken = list(self.items)
+        self.items.clear()
+        self.bytes = 0
+        return taken
+
+
 # -- the recorder --------------------------------------------------------------------------------
 class Recorder:
     def __init__(self, source: RecordSource, options: RecordOptions) -> None:
@@ -115,6 +138,11 @@ class Recorder:
         self.queue.paused = options.start_paused
         self.queue.periods = {source.resolve(t): round(1e9 / hz) for t, hz in options.max_rates.items()}
         self._written_bytes: collections.Counter[str] = collections.Counter()
+        self._ring = (
+            _Ring(options.buffer_bytes, round(options.snapshot_seconds * 1e9)) if options.snapshot else None
+        )
+        self._snapshot_asked = threading.Event()
+        self.snapshots: list[int] = []  # messages written by each snapshot
         self.result = RecordResult()
         self._subscribed: set[str] = set()
         self._split_index = 0 if options.split else None
@@ -231,10 +259,22 @@ class Recorder:
                 queue.ready.wait(FLUSH_INTERVAL)
                 queue.ready.clear()
                 batch = queue.take()
-                for topic, origin, stamp, payload in batch:
+                ring = self._ring
+                for item in batch:
                     if self._limit_reached.is_set():
                         break
-                    self._write_one(topic, origin, stamp, payload)
+                    if ring is not None:
+                        ring.add(item)
+                    else:
+                        self._write_one(*item)
+                if ring is not None and self._snapshot_asked.is_set():
+                    self._snapshot_asked.clear()
+                    taken = ring.take()
+                    for item in taken:
+                        self._write_one(*item)
+                    self.snapshots.append(len(taken))
+                    if self._sink is not None:
+                        self._sink.flush()
                 now = time.monotonic()
                 if self._sink is not None and (not batch or now - last_flush >= FLUSH_INTERVAL):
                     self._sink.flush()
@@ -293,6 +333,11 @@ class Recorder:
             self._stop.set()
 
     # -- main ------------------------------------------------------------------------------------
+    def take_snapshot(self) -> None:
+        """Snapshot mode: write what the buffer holds now (done by the writer thread)."""
+        self._snapshot_asked.set()
+        self.queue.ready.set()
+
     @property
     def paused(self) -> bool:
         return self.queue.paused
@@ -311,6 +356,7 @@ class Recorder:
             topics=len(self.result.counts),
             dropped=sum(self.queue.dropped.values()),
             paused=self.queue.paused,
+            buffered=None if self._ring is None else len(self._ring.items),
             per_topic=self._per_topic(),
         )
 

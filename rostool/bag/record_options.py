@@ -44,6 +44,10 @@ class RecordOptions:
     use_sim_time: bool = False  # stamp with the latest /clock; nothing is written before the first one
     start_paused: bool = False  # take no message until resumed (ros2 bag record --start-paused)
     max_rates: Mapping[str, float] = field(default_factory=dict)  # topic -> at most this many messages/s
+    # --snapshot-mode: keep the newest messages in memory (at most `buffer_bytes`, and `snapshot_seconds`
+    # of them when > 0) and write them only when a snapshot is asked for (SIGUSR2, key 's')
+    snapshot: bool = False
+    snapshot_seconds: float = 0.0
 
 
 @dataclass
@@ -62,6 +66,7 @@ class RecordStatus:
     topics: int
     dropped: int
     paused: bool = False
+    buffered: int | None = None  # snapshot mode: messages held in memory
     per_topic: dict[str, TopicStatus] = field(default_factory=dict)
 
 

@@ -45,6 +45,8 @@ class RecordDashboard:
 
         elapsed = int(now - self._started)
         state = "  [PAUSED]" if status.paused else ""
+        if status.buffered is not None:
+            state += f"  [SNAPSHOT MODE: {status.buffered} msgs buffered]"
         rows = [("topic", "msgs", "rate", "bandwidth", "written", "dropped", "throttled")]
         then, before = self._history[0]
         span = now - then
@@ -95,6 +97,8 @@ class PlainProgress:
             return
         self._next = now + self.interval
         paused = " (paused)" if status.paused else ""
+        if status.buffered is not None:
+            paused += f" ({status.buffered} msgs buffered for a snapshot)"
         dropped = f", {status.dropped} dropped" if status.dropped else ""
         sys.stderr.write(
             f"rostool: recording {status.path}{paused}: {status.messages} msgs on {status.topics} topic"
@@ -107,22 +111,29 @@ class PlainProgress:
 
 
 @contextlib.contextmanager
-def pause_controls(toggle: Callable[[], None], keyboard: bool) -> Iterator[bool]:
-    """While recording: space (when stdin is this process's terminal) and SIGUSR1 call `toggle`. Yields
-    whether the keyboard is read."""
+def pause_controls(
+    toggle: Callable[[], None], keyboard: bool, snapshot: Callable[[], None] | None = None
+) -> Iterator[bool]:
+    """While recording: space (when stdin is this process's terminal) and SIGUSR1 call `toggle`; in snapshot
+    mode 's' and SIGUSR2 call `snapshot`. Yields whether the keyboard is read."""
     console = Console(status=False, keyboard=keyboard and Console.detect(quiet=True).keyboard)
     done = threading.Event()
-    previous = None
+    previous = {}
     if threading.current_thread() is threading.main_thread():
-        previous = signal.signal(signal.SIGUSR1, lambda _signum, _frame: toggle())
+        previous[signal.SIGUSR1] = signal.signal(signal.SIGUSR1, lambda _signum, _frame: toggle())
+        if snapshot is not None:
+            previous[signal.SIGUSR2] = signal.signal(signal.SIGUSR2, lambda _signum, _frame: snapshot())
     with console:
         reader = None
         if console.keyboard:
 
             def read_keys() -> None:
                 while not done.wait(KEY_POLL):
-                    if " " in console.read_keys():
-                        toggle()
+                    for key in console.read_keys():
+                        if key == " ":
+                            toggle()
+                        elif key == "s" and snapshot is not None:
+                            snapshot()
 
             reader = threading.Thread(target=read_keys, name="record-keys", daemon=True)
             reader.start()
@@ -132,5 +143,5 @@ def pause_controls(toggle: Callable[[], None], keyboard: bool) -> Iterator[bool]
             done.set()
             if reader is not None:
                 reader.join()
-            if previous is not None:
-                signal.signal(signal.SIGUSR1, previous)
+            for signum, handler in previous.items():
+                signal.signal(signum, handler)

@@ -13,7 +13,7 @@ from rostool.errors import RostoolError
 from rostool.graph.qos import QosRequest
 
 UNSUPPORTED = (
-    "snapshot_mode", "static_topics_path", "storage_preset_profile",
+    "static_topics_path", "storage_preset_profile",
     "storage_config_file",
 )  # fmt: skip
 
@@ -126,6 +126,8 @@ def check_flags(flags: RecordFlags) -> None:
         )
     if flags.compression_format and flags.compression_mode == "none":
         raise RostoolError("Invalid choice: Cannot specify compression format without a compression mode.")
+    if flags.snapshot_mode and flags.max_cache_size == 0:
+        raise RostoolError("--max-cache-size must be greater than 0 when --snapshot-mode is enabled")
     if flags.max_bag_files and not (flags.max_bag_size or flags.max_bag_duration):
         raise RostoolError("--max-bag-files needs --max-bag-size or --max-bag-duration")
     warn = [

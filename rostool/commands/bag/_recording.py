@@ -78,9 +78,20 @@ def run_record(ctx: click.Context, request: RecordRequest) -> None:
                 click.echo(f"[INFO] [rosbag2_recorder]: {word} recording." if ros2_form else
                            f"rostool: {word.lower()} recording", err=True)  # fmt: skip
 
-        with stop_on_signals(stop), pause_controls(toggle, request.keyboard) as keys:
+        def snapshot() -> None:
+            recorder.take_snapshot()
+            if progress is not None:
+                progress.end()
+            if not request.quiet:
+                click.echo("[INFO] [rosbag2_recorder]: Taking a snapshot." if ros2_form else
+                           "rostool: writing a snapshot", err=True)  # fmt: skip
+
+        take = snapshot if options.snapshot else None
+        with stop_on_signals(stop), pause_controls(toggle, request.keyboard, take) as keys:
             if not request.quiet and (keys or recorder.paused):
                 click.echo(_pause_hint(keys, recorder.paused, ros2_form), err=True)
+            if not request.quiet and options.snapshot:
+                click.echo(_snapshot_hint(keys, ros2_form), err=True)
             try:
                 result = recorder.run(stop, progress)
                 if isinstance(progress, RecordDashboard):
@@ -98,6 +109,12 @@ def _pause_hint(keys: bool, paused: bool, ros2_form: bool) -> str:
     if ros2_form:
         return f"[INFO] [rosbag2_recorder]: Press {how} for pausing/resuming.{state}"
     return f"rostool: {how} pauses and resumes recording.{state}"
+
+
+def _snapshot_hint(keys: bool, ros2_form: bool) -> str:
+    how = ("'s' or " if keys else "") + f"SIGUSR2 (kill -USR2 {os.getpid()})"
+    text = f"Snapshot mode: messages are held in memory and written when {how} asks for a snapshot."
+    return f"[INFO] [rosbag2_recorder]: {text}" if ros2_form else f"rostool: {text}"
 
 
 def _report(result: RecordResult, request: RecordRequest, warn: Callable[[str], None]) -> None:

@@ -99,10 +99,13 @@ RECORD_LISTS = (
 @click.option("--compression-queue-size", type=click.IntRange(min=0), default=1, help="Accepted.")
 @click.option("--compression-threads", type=click.IntRange(min=0), default=0, help="Accepted.")
 @click.option("--compression-threads-priority", type=int, default=0, help="Accepted.")
-@click.option("--max-cache-duration", type=click.IntRange(min=0), default=0, help="Accepted.")
+@click.option("--max-cache-duration", type=click.IntRange(min=0), default=0, metavar="S",
+              help="With --snapshot-mode: hold the last S seconds of messages at most (0: any).")  # fmt: skip
 @click.option("--start-paused", is_flag=True,
               help="Start paused: nothing is recorded until SPACE (or SIGUSR1) resumes.")  # fmt: skip
-@click.option("--snapshot-mode", is_flag=True, help="Not supported yet (refused in one line).")
+@click.option("--snapshot-mode", is_flag=True,
+              help="Hold the newest messages in memory (--max-cache-size/-duration); write them on 's' "
+                   "or SIGUSR2.")  # fmt: skip
 @click.option("--ignore-leaf-topics", is_flag=True,
               help="Leave out discovered topics no one subscribes to (until someone does).")  # fmt: skip
 @click.option("--static-topics-path", metavar="FILE", help="Not supported yet (refused in one line).")
@@ -180,6 +183,8 @@ def record(ctx: click.Context, flags: RecordFlags) -> None:
         use_sim_time=flags.use_sim_time,
         start_paused=flags.start_paused,
         max_rates=parse_max_rates(flags.max_rate),
+        snapshot=flags.snapshot_mode,
+        snapshot_seconds=float(flags.max_cache_duration),
     )
     request = RecordRequest(
         options=options,
