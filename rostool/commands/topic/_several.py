@@ -13,6 +13,12 @@ all_topics_option = click.option(
 )  # fmt: skip
 
 
+def require_topics(names: tuple[str, ...], all_topics: bool) -> None:
+    """Refused before the graph is opened: nothing to measure."""
+    if not names and not all_topics:
+        raise RostoolError("no topic to measure: name one or more, or give --all")
+
+
 def chosen_topics(graph: Graph, names: tuple[str, ...], all_topics: bool) -> list[str]:
     """The resolved names to measure, in the order given (with --all: the graph's, sorted, after them)."""
     chosen = [graph.resolve(n) for n in names]
@@ -23,7 +29,7 @@ def chosen_topics(graph: Graph, names: tuple[str, ...], all_topics: bool) -> lis
         if graph.style == "ros2":
             published = [n for n in published if not hidden_name(n)]
         chosen += [n for n in published if n not in chosen]
+    require_topics(tuple(chosen), all_topics)
     if not chosen:
-        raise RostoolError("no topic to measure: name one or more, or give --all" if not all_topics
-                           else "--all: no topic has a publisher yet")  # fmt: skip
+        raise RostoolError("--all: no topic has a publisher yet")
     return list(dict.fromkeys(chosen))

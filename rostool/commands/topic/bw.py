@@ -8,7 +8,7 @@ import click
 
 from rostool.commands._common import ignored_ros2_options, live_graph
 from rostool.commands._qos import qos_options
-from rostool.commands.topic._several import all_topics_option, chosen_topics
+from rostool.commands.topic._several import all_topics_option, chosen_topics, require_topics
 from rostool.graph.qos import QosRequest
 
 
@@ -40,6 +40,7 @@ def bw(
     from rostool.graph.rates import SizeMeter
     from rostool.output.rate_text import bandwidth_report
 
+    require_topics(names, all_topics)
     with live_graph(ctx) as graph:
         graph.use_qos(qos)
         ros2 = graph.style == "ros2"

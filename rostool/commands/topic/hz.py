@@ -10,7 +10,7 @@ import click
 
 from rostool.commands._common import ignored_ros2_options, live_graph
 from rostool.commands._qos import qos_options
-from rostool.commands.topic._several import all_topics_option, chosen_topics
+from rostool.commands.topic._several import all_topics_option, chosen_topics, require_topics
 from rostool.graph.base import Received
 from rostool.graph.qos import QosRequest
 
@@ -47,6 +47,7 @@ def hz(
     from rostool.output.filter_expr import compile_filter
     from rostool.output.rate_text import hz_report
 
+    require_topics(names, all_topics)
     keep = compile_filter(filter_text) if filter_text else None
     with live_graph(ctx) as graph:
         graph.use_qos(qos)
