@@ -747,3 +747,52 @@ def test_param_get_several(graph: ParityGraph) -> None:
         ):
             failed.append(f"{backend}: a missing name: exit {missing.code} {missing.stderr_lines}")
     assert not failed, "\n".join(failed)
+
+
+# --- param load with wildcards (ros2param's test_verb_load): `/**` applies to every node unless
+# --no-use-wildcard, the node's own section overrides it; a node or file that is not there fails ---------
+WILDCARD = "/**:\n  ros__parameters:\n    label: wild\n    count: 12345\n"
+OVERLAY = "/parity_server:\n  ros__parameters:\n    label: override\n"
+
+
+def test_param_load_wildcards(graph: ParityGraph) -> None:
+    wildcard, both = graph.tmp / "wildcard.yaml", graph.tmp / "overlay.yaml"
+    wildcard.write_text(WILDCARD)
+    both.write_text(WILDCARD + OVERLAY)
+    tools: dict[str, Callable[[list[str]], Run]] = {"ros2": graph.ros2}
+    tools |= {b: lambda args, b=b: graph.rostool(b, args) for b in BACKENDS}
+
+    def values() -> tuple[str, str]:
+        label = graph.ros2(["param", "get", "--hide-type", "/parity_server", "label"]).stdout
+        count = graph.ros2(["param", "get", "--hide-type", "/parity_server", "count"]).stdout
+        return label.strip(), count.strip()
+
+    seen: dict[str, list[object]] = {}
+    for who, run in tools.items():
+        graph.ros2(["param", "set", "/parity_server", "label", "before"])
+        graph.ros2(["param", "set", "/parity_server", "count", "1"])
+        refused = run(["param", "load", "/parity_server", str(wildcard), "--no-use-wildcard"])
+        kept = values()
+        loaded = run(["param", "load", "/parity_server", str(wildcard)])
+        wild = values()
+        overlaid = run(["param", "load", "/parity_server", str(both)])
+        over = values()
+        no_node = run(["param", "load", "/parity_nobody", str(wildcard)])
+        no_file = run(["param", "load", "/parity_server", str(graph.tmp / "parity_nofile.yaml")])
+        seen[who] = [
+            refused.code, kept, loaded.code, loaded.stdout, wild, overlaid.code, overlaid.stdout, over,
+            no_node.code, no_file.code,
+        ]  # fmt: skip
+        if who != "ros2":
+            errors = (refused, no_node, no_file)
+            seen[who].append([len(e.stderr_lines) == 1 and not e.stdout for e in errors])
+    # ros2's own test's facts
+    ros2 = seen["ros2"]
+    assert ros2[0] != 0 and ros2[1] == ("before", "1"), ros2
+    assert ros2[4] == ("wild", "12345") and ros2[7] == ("override", "12345"), ros2
+    assert ros2[8] != 0 and ros2[9] != 0, ros2
+    failed = [f"{b}: {seen[b]}\nros2: {ros2}" for b in BACKENDS if seen[b] != [*ros2, [True, True, True]]]
+    for backend in BACKENDS:
+        step = Case("param load", "(wildcards)", ("param", "load"), name="param load NODE WILDCARD_FILES")
+        judge(step, backend, SAME if seen[backend] == [*ros2, [True, True, True]] else DIFFERS)
+    assert not failed, "\n".join(failed)
