@@ -18,6 +18,7 @@ every ROS 2 test. It takes roles from its arguments and reports what it sees as 
     (no events)                                          --repeat TYPE=TOPIC: default TYPE messages at 1 Hz
                                                          --hello TOPIC: 'Hello World: N' at 1 Hz
                                                          --cmd-vel TOPIC: TwistStamped, stamp now, linear.x 1
+                                                         (--period S: every S seconds instead)
 
 Not a pytest module: tests start it through tests/ros2_peers.py.
 """
@@ -168,18 +169,18 @@ class Peer(Node):
             package, _, name = type_name.split("/")
             cls = getattr(importlib.import_module(f"{package}.msg"), name)
             publisher = self.create_publisher(cls, topic, 10)
-            self.create_timer(1.0, lambda p=publisher, c=cls: p.publish(c()))
+            self.create_timer(args.period, lambda p=publisher, c=cls: p.publish(c()))
         if args.hello:
             from std_msgs.msg import String
 
             self.hello = self.create_publisher(String, args.hello, 10)
             self.hello_count = 0
-            self.create_timer(1.0, self.tick_hello)
+            self.create_timer(args.period, self.tick_hello)
         if args.cmd_vel:
             from geometry_msgs.msg import TwistStamped
 
             self.cmd_vel = self.create_publisher(TwistStamped, args.cmd_vel, 10)
-            self.create_timer(1.0, self.tick_cmd_vel)
+            self.create_timer(args.period, self.tick_cmd_vel)
 
     def tick_hello(self) -> None:
         from std_msgs.msg import String
@@ -367,6 +368,8 @@ def main() -> None:
     )
     parser.add_argument("--hello", help="publish std_msgs/String 'Hello World: N' here at 1 Hz")
     parser.add_argument("--cmd-vel", help="publish geometry_msgs/TwistStamped (stamp now, x 1) at 1 Hz")
+    parser.add_argument("--period", type=float, default=1.0, help="seconds between --repeat, --hello and "
+                        "--cmd-vel messages (ros2cli's fixtures: 1)")  # fmt: skip
     args = parser.parse_args()
     rclpy.init()
     node = Peer(args)
