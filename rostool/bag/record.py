@@ -392,6 +392,9 @@ class Recorder:
                     name = self.source.resolve(topic)
                     if self.exclude is None or not self.exclude.fullmatch(name):
                         self._subscribe(name)
+            wait_ready = getattr(self.source, "wait_ready", None)
+            if wait_ready is not None:  # ROS 2: --duration counts from when the subscriptions record
+                wait_ready()
             started = time.monotonic()
             if options.all_topics or options.regex or options.node or options.wanted:
                 threading.Thread(

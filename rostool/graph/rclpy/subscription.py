@@ -114,6 +114,12 @@ class RclpySubscription(DrainingSubscription):
                         break
                     on_bytes(taken[0])
 
+    def _matched_count(self) -> int | None:
+        try:
+            return int(self._reader.get_publisher_count())
+        except Exception:  # no reader (yet, or any more: destroyed with its node)
+            return None
+
     def _on_incompatible(self, event: Any) -> None:
         self._policy = getattr(getattr(event, "last_policy_kind", None), "name", "?")
         self._incompatible.set()

@@ -330,6 +330,7 @@ class DdsSubscription(DrainingSubscription):
 
     def _setup(self) -> None:
         self._waitset: Any = None
+        self._reader: Any = None
 
     def _discovery_started(self) -> float:
         return self._graph.session.cache.started
@@ -362,6 +363,14 @@ class DdsSubscription(DrainingSubscription):
             cache.poll()
         return writers
 
+    def _matched_count(self) -> int | None:
+        from cyclonedds.core import DDSException
+
+        try:
+            return int(self._reader.get_subscription_matched_status().current_count)
+        except (AttributeError, DDSException):  # no reader (yet, or any more)
+            return None
+
     def _read_with(self, store_name: str, profile: QosProfile) -> QosProfile | None:
         from cyclonedds._clayer import ddspy_take  # type: ignore[import-not-found]
         from cyclonedds.core import ReadCondition, WaitSet
@@ -369,6 +378,7 @@ class DdsSubscription(DrainingSubscription):
 
         session = self._graph.session
         reader = session.reader(topic_to_dds(self._topic), store_name, self._cache_profile(profile))
+        self._reader = reader
         waitset = WaitSet(session.participant.dp)
         waitset.attach(ReadCondition(reader, _ANY_SAMPLE))
         self._waitset = waitset
@@ -393,6 +403,7 @@ class DdsSubscription(DrainingSubscription):
                     reported = status.total_count
                     adapted = self._readapted(profile)
                     if adapted is not None:
+                        self._reader = None
                         session.drop(reader)
                         return adapted
                     policy_id = status.last_policy_id

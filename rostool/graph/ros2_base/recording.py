@@ -3,6 +3,7 @@ either transport; samples stay CDR bytes."""
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
@@ -10,8 +11,14 @@ from rostool.graph.recording import Encoding, Put, subscribed_by
 from rostool.interfaces.names import hidden_name
 
 if TYPE_CHECKING:
-    from rostool.graph.base import Received
+    from rostool.graph.base import Received, Subscription
     from rostool.graph.ros2_base.transport import Ros2Host
+
+
+# how long a recording's first subscriptions wait for their publishers to be discovered and matched: a fresh
+# participant meets Fast DDS's endpoints on its 1 s heartbeat, a Fast DDS one on the peer's 3 s announcement
+START_WAIT_SECONDS = 3.0
+READY_GRACE = 0.3  # after one subscription matched, how long one without a known publisher is waited for
 
 
 class Ros2Source:
@@ -25,6 +32,7 @@ class Ros2Source:
         self.warn = warn
         self.resolve = graph.resolve
         graph.warn = warn  # the subscriptions' warnings (incompatible QoS) go to the same place
+        self._subscriptions: list[Subscription] = []
 
     def published_topics(self) -> list[str]:
         """Topics another node publishes now, as discovery knows them this moment: the recorder asks again
@@ -50,7 +58,27 @@ class Ros2Source:
         def on_message(received: Received) -> None:
             put(topic, received.payload, received.type_name)
 
-        self.graph.subscribe(topic, on_message, lambda text: self.warn(f"{topic}: {text}"))
+        subscription = self.graph.subscribe(topic, on_message, lambda text: self.warn(f"{topic}: {text}"))
+        self._subscriptions.append(subscription)
+
+    def wait_ready(self, timeout: float = START_WAIT_SECONDS) -> None:
+        """Return once the subscriptions made so far record: each has matched the publishers discovery
+        knew when its reader was made (the transport's matched count). A topic whose publisher is not
+        known yet is waited for only READY_GRACE s after another one matched (discovery brings a peer's
+        endpoints together: it is unpublished, or its publisher is still far), and `timeout` s at most.
+        The recorder calls this before it starts --duration's clock, so 3 s of recording are 3 s of
+        messages, not a discovery and the rest."""
+        deadline = time.monotonic() + timeout
+        grace_ends: float | None = None
+        while (now := time.monotonic()) < deadline:
+            waiting = [s for s in self._subscriptions if not _matched(s)]
+            if not waiting:
+                return
+            if grace_ends is None and len(waiting) < len(self._subscriptions):
+                grace_ends = now + READY_GRACE
+            if grace_ends is not None and now >= grace_ends and not any(_has_publishers(s) for s in waiting):
+                return
+            time.sleep(0.005)
 
     def describe(self, topic: str, origin: Any) -> dict[str, str]:
         """The bag's view of the topic: its ROS 2 type and whether its publishers latch."""
@@ -62,3 +90,12 @@ class Ros2Source:
 
     def close(self) -> None:
         self.graph.close()
+
+
+def _matched(subscription: Subscription) -> bool:
+    wait_matched = getattr(subscription, "wait_matched", None)
+    return True if wait_matched is None else bool(wait_matched(0.0))
+
+
+def _has_publishers(subscription: Subscription) -> bool:
+    return bool(getattr(subscription, "publishers_known", True))

@@ -27,6 +27,7 @@ SUBSCRIBERS_ONLY_WAIT = 0.5  # a topic with subscribers only: how long publisher
 # how often the transport's view is asked for the topic's publishers: the reader is made this long at most
 # after discovery knew one (a look at what discovery already holds costs microseconds)
 DISCOVERY_POLL = 0.01
+MATCH_POLL = 0.005  # how often wait_matched looks at the reader's matched count (a status read)
 
 
 class DrainingSubscription:
@@ -38,6 +39,7 @@ class DrainingSubscription:
         self._on_message = on_message
         self._on_error = on_error
         self._closed = threading.Event()
+        self._expected: int | None = None  # the publishers discovery knew when the reader was made
         self._setup()
         self._since = self._discovery_started()
         self._thread = threading.Thread(target=self._run, name=f"{self.thread_name} {topic}", daemon=True)
@@ -67,7 +69,31 @@ class DrainingSubscription:
     def _drop(self) -> None:
         """Delete the transport's reader."""
 
+    def _matched_count(self) -> int | None:
+        """How many publishers the transport's reader has matched; None while there is no reader."""
+        return None
+
     # --- shared ----------------------------------------------------------------------------------------
+    @property
+    def publishers_known(self) -> bool:
+        """Whether discovery showed the topic's publishers (the reader is made, or about to be)."""
+        return self._expected is not None
+
+    def wait_matched(self, timeout: float) -> bool:
+        """Wait for the event a recording starts on: the reader exists and has matched every publisher
+        discovery knew when it was made (its matched count), at most `timeout` s. False when no publisher
+        was known in that time, or one never matched (incompatible QoS: warned about), or closed."""
+        deadline = time.monotonic() + timeout
+        while not self._closed.is_set():
+            expected, count = self._expected, self._matched_count()
+            if expected is not None and count is not None and count >= expected:
+                return True
+            left = deadline - time.monotonic()
+            if left <= 0:
+                return False
+            self._closed.wait(min(MATCH_POLL, left))
+        return False
+
     def close(self) -> None:
         self._closed.set()
         self._wake()
@@ -101,6 +127,7 @@ class DrainingSubscription:
                 profile, notes = adapt_to_publishers(graph.qos_request, [w.qos for w in writers])
                 for note in notes:
                     graph.warn(note)
+                self._expected = len(writers)
                 return store_name, profile
             self._closed.wait(DISCOVERY_POLL)
         return None
