@@ -55,3 +55,36 @@ def test_right_arrow_steps_and_up_down_change_the_rate(tmp_path: Path) -> None:
         term.close()
         echo.stop()
     assert received(echo) == expected
+
+
+def test_ros1_form_steps_with_the_right_arrow_and_shows_the_rate(
+    debian_master: dict[str, str], tmp_path: Path
+) -> None:
+    """rosbag's form on a ROS 1 graph: Debian's rostopic echo receives exactly the stepped messages."""
+    from tests.support import debian_popen
+    from tests.test_bag_play import wait_subscribed, write_int_bag
+
+    env = debian_master
+    bag = write_int_bag(tmp_path / "numbers.bag", count=20, period_ns=100_000_000)
+    echo = Watched(debian_popen(["rostopic", "echo", "/numbers/data"], env))
+    term = Terminal(
+        ["--ros1", "bag", "play", "--pause", "-d", "0", "--wait-for-subscribers", str(bag)], env, tmp_path
+    )
+    try:
+        wait_subscribed(env, "/numbers")
+        assert term.wait_for(lambda s: "Hit space to toggle paused" in s and "[PAUSED ]" in s, 30), (
+            term.screen()
+        )
+        for step in (1, 2, 3):
+            term.send("Right")
+            assert echo.wait_for(lambda out, n=step: out.count("---") >= n, 10), echo.stdout
+        term.send("Down")
+        assert term.wait_for(lambda s: "Rate: 0.9" in s), term.screen()
+        assert echo.stdout.split() == ["0", "---", "1", "---", "2", "---"]  # paused: nothing more
+        term.send("Space")
+        assert term.wait_for(lambda s: "Done." in s and "[exit 0]" in s, 30), term.screen()
+        assert echo.wait_for(lambda out: out.count("---") >= 20, 10), echo.stdout
+    finally:
+        term.close()
+        echo.stop()
+    assert echo.stdout.split()[::2] == [str(i) for i in range(20)]
