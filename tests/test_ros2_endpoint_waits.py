@@ -12,6 +12,8 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+import pytest
+
 from tests.ros2_backends import Tool, ToolPopen
 from tests.ros2_peers import RclpyPeer
 from tests.support import Watched, rostool_popen, stop, wait_until
@@ -72,6 +74,21 @@ def test_bag_record_keeps_every_message_sent_after_the_match(
     missing = sorted(set(range(matched + 1, last + 1)) - set(numbers))
     assert not missing, f"matched at {matched}: {missing} not recorded"
     assert min(numbers) >= matched - 2, (min(numbers), matched)  # nothing from before the subscription
+
+
+@pytest.mark.alone  # a time window: --duration
+def test_bag_record_duration_counts_from_the_match(tool: Tool, start_peer: Start, tmp_path: Path) -> None:
+    """--duration 3 of a 10 Hz talker: the clock starts when the subscription matched, so the bag holds
+    the first message sent after the match and the ~30 that follow it, none missing."""
+    talker = start_peer("--name", "talker", "--talk", "/t", "--rate", "10")
+    bag = tmp_path / "three_seconds"
+    done = tool(["bag", "record", "/t", "--duration", "3", "-o", str(bag)], timeout=60)
+    assert done.returncode == 0, done.stderr
+    numbers = numbers_in_bag(bag)
+    matched = first_match(talker)
+    assert numbers and min(numbers) <= matched + 1, (numbers[:3], matched)
+    assert numbers == list(range(min(numbers), max(numbers) + 1))
+    assert len(numbers) >= 25, len(numbers)  # 30 on an idle machine (bench/bench_startup.py)
 
 
 def test_pub_once_is_heard_by_the_real_listener(tool: Tool, start_peer: Start) -> None:
