@@ -174,7 +174,13 @@ def bench_record(tools: list[Tool], runs: int, scratch: Path) -> None:
             if label.startswith("rostool"):
                 bag = scratch / f"bag_{label.replace(' ', '_')}_{run}"
                 for_seconds([*command, "bag", "record", "/t", "-o", str(bag)], env, RECORD_SECONDS)
-                kept.setdefault(f"{label} bag record /t", []).append(bag_messages(bag))
+                kept.setdefault(f"{label} bag record /t (Ctrl+C 3 s after start)", []).append(
+                    bag_messages(bag)
+                )
+                timed_bag = scratch / f"duration_{label.replace(' ', '_')}_{run}"
+                verb = ["bag", "record", "/t", "--duration", f"{RECORD_SECONDS:g}", "-o", str(timed_bag)]
+                timed([*command, *verb], env, timeout=60)
+                kept.setdefault(f"{label} bag record /t --duration 3", []).append(bag_messages(timed_bag))
             out = for_seconds([*command, "topic", "echo", "/t"], env, RECORD_SECONDS)
             kept.setdefault(f"{label} topic echo /t", []).append(_count_lines(out, "data: hello"))
     for label, values in sorted(kept.items(), key=_record_order):
