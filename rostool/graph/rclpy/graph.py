@@ -56,6 +56,7 @@ class RclpyGraph(Ros2Base):
         self._record_settled = False
         self.spin_time: float | None = None  # --spin-time: a listing's discovery wait, as ros2cli's
         self._spin_deadline: float | None = None
+        self._described: set[str] = set()  # the long-lived graph's nodes seen with endpoints
 
     @property
     def types(self) -> Ros2Types:  # type: ignore[override]
@@ -100,9 +101,31 @@ class RclpyGraph(Ros2Base):
         return nodes, topics, services
 
     def node_pairs(self) -> list[tuple[str, str]]:
-        """(name, namespace) of every node but this process's own."""
+        """(name, namespace) of every node but this process's own (and, in a long-lived graph, but those
+        that left)."""
         own = (self._node_name, "/")
-        return [p for p in self.node.get_node_names_and_namespaces() if tuple(p) != own]
+        pairs = [p for p in self.node.get_node_names_and_namespaces() if tuple(p) != own]
+        return self._alive(pairs) if self._long_lived else pairs
+
+    def _alive(self, pairs: list[tuple[str, str]]) -> list[tuple[str, str]]:
+        """Without the nodes that had endpoints and lost every one: gone, though rmw's graph cache can keep
+        the name of a node whose participant left for good (its last ros_discovery_info sample processed
+        after the participant's removal: ros2/ros2#514), and a long-lived graph must never list it."""
+        kept, listed = [], set()
+        for name, namespace in pairs:
+            full = self.full_name(name, namespace)
+            listed.add(full)
+            try:
+                has_endpoints = any(self._node_endpoints(full))
+            except RostoolError:
+                has_endpoints = False
+            if has_endpoints:
+                self._described.add(full)
+            elif full in self._described:
+                continue
+            kept.append((name, namespace))
+        self._described &= listed  # forget the names rmw forgot
+        return kept
 
     def settle(self, require_peers: bool = False, until: Callable[[], bool] | None = None) -> bool:
         """Wait until the graph stops changing (once per process) or `until()`; whether anything other
