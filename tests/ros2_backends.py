@@ -8,12 +8,12 @@ from __future__ import annotations
 
 import re
 import subprocess
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
 
-from tests.ros2_peers import rostool_rclpy, rostool_rclpy_popen
+from tests.ros2_peers import WarmDaemon, rostool_rclpy, rostool_rclpy_popen
 from tests.support import rostool, rostool_popen
 
 BACKENDS = ("dds", "rclpy")
@@ -48,6 +48,41 @@ def tool(backend: str, graph_env: dict[str, str], tmp_path: Path, distro: str) -
         return done
 
     return run
+
+
+@pytest.fixture
+def served_tool(backend: str, graph_env: dict[str, str], tmp_path: Path, distro: str) -> Iterator[ServedTool]:
+    """tool(args, timeout=30) as `tool` gives it, with the listings answered by a warm graph daemon of the
+    test's backend (`served_tool.daemon`; stopped at the end). Keep a direct test of each verb too."""
+
+    def popen(args: list[str], env: dict[str, str]) -> subprocess.Popen[str]:
+        if backend == "rclpy":
+            return rostool_rclpy_popen(args, env, tmp_path, distro)
+        return rostool_popen(["--ros2", *args], env)
+
+    daemon = WarmDaemon(graph_env, popen)
+
+    def run(args: list[str], timeout: float = 30) -> subprocess.CompletedProcess[str]:
+        if backend == "rclpy":
+            done = rostool_rclpy(args, daemon.env, tmp_path, distro, timeout=timeout)
+        else:
+            done = rostool(args, daemon.env, timeout)
+        done.stderr_lines = rostool_lines(done.stderr)  # type: ignore[attr-defined]
+        return done
+
+    served = ServedTool(run, daemon)
+    yield served
+    left = daemon.stop()
+    assert not left, f"graph daemons still running after `daemon stop --all`: {left}"
+
+
+class ServedTool:
+    def __init__(self, run: Tool, daemon: WarmDaemon) -> None:
+        self.run = run
+        self.daemon = daemon
+
+    def __call__(self, args: list[str], timeout: float = 30) -> subprocess.CompletedProcess[str]:
+        return self.run(args, timeout=timeout)
 
 
 @pytest.fixture

@@ -198,11 +198,18 @@ class WarmDaemon:
     socket's is limited to 107 bytes). The daemon starts at once and discovers while the peers start;
     `ready()` waits until it answers, so that every listing of the test is served warm."""
 
-    def __init__(self, env: dict[str, str]) -> None:
+    def __init__(
+        self,
+        env: dict[str, str],
+        popen: Callable[[list[str], dict[str, str]], subprocess.Popen[str]] | None = None,
+    ) -> None:
+        """`popen(args, env)` runs rostool as the test runs it (default: the DDS backend of the test venv;
+        the daemon's key includes the backend and the interpreter)."""
         self.run_dir = Path(tempfile.mkdtemp(prefix="rtw"))
         self.env = {**env, "ROSTOOL_NO_DAEMON": "", "XDG_RUNTIME_DIR": str(self.run_dir),
                     "XDG_STATE_HOME": str(self.run_dir / "state")}  # fmt: skip
-        self._starting: subprocess.Popen[str] | None = rostool_popen(["--ros2", "daemon", "start"], self.env)
+        self._popen = popen or (lambda args, env: rostool_popen(["--ros2", *args], env))
+        self._starting: subprocess.Popen[str] | None = self._popen(["daemon", "start"], self.env)
 
     def ready(self) -> None:
         if self._starting is None:
@@ -213,9 +220,10 @@ class WarmDaemon:
 
     def graph_size(self) -> dict[str, int]:
         """What the daemon holds now (`daemon status --json`'s graph: nodes, topics, services, actions)."""
-        done = rostool(["--ros2", "daemon", "status", "--json"], self.env)
-        assert done.returncode == 0, done.stderr
-        return dict(json.loads(done.stdout)["graph"])
+        status = self._popen(["daemon", "status", "--json"], self.env)
+        out, err = status.communicate(timeout=30)
+        assert status.returncode == 0, err
+        return dict(json.loads(out)["graph"])
 
     def held_locks(self) -> list[int]:
         """The pids of daemons still holding a lock in the runtime directory."""

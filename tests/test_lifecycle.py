@@ -13,9 +13,9 @@ from pathlib import Path
 import pytest
 
 from tests import ros2_peers
-from tests.ros2_backends import Tool, rostool_lines
+from tests.ros2_backends import ServedTool, Tool, rostool_lines
 from tests.ros2_peers import PEERS_DIR, RclpyPeer, assert_loopback_only, bound_addresses, peer_env
-from tests.support import IN_CI
+from tests.support import IN_CI, wait_until
 
 HERE = Path(__file__).resolve().parent
 ROS2CLI_VENV = PEERS_DIR / "jazzy"
@@ -115,12 +115,17 @@ NAMED_FORMS = [
 
 @pytest.mark.parametrize("distro", ["jazzy"])
 def test_lifecycle_forms_print_what_ros2_prints(
-    tool: Tool, ros2: Ros2, start_script: StartScript, backend: str
+    served_tool: ServedTool, ros2: Ros2, start_script: StartScript, backend: str
 ) -> None:
-    """ros2lifecycle's own test cases (its test/test_cli.py), run by both tools on the same nodes."""
+    """ros2lifecycle's own test cases (its test/test_cli.py), run by both tools on the same nodes, each
+    through its daemon (rostool's direct forms: test_set_moves_the_node_through_its_states)."""
+    tool = served_tool
     start_script("lifecycle_peer.py")
     start_script("lifecycle_peer.py", "--name", HIDDEN[1:])
     ros2_sees(ros2, [NODE, HIDDEN])
+    tool.daemon.ready()
+    # the two lifecycle nodes and the real ros2's own daemon node
+    assert wait_until(lambda: tool.daemon.graph_size()["nodes"] == 3, timeout=20)
     for args in LISTING_FORMS:
         same_as_ros2(tool, ros2, ["lifecycle", *args], attempts=3 if backend == "rclpy" else 1)
     for args in NAMED_FORMS:
@@ -132,8 +137,11 @@ def test_lifecycle_forms_print_what_ros2_prints(
 
 
 def test_set_moves_the_node_through_its_states(tool: Tool, ros2: Ros2, start_script: StartScript) -> None:
+    """set moves the real node; nodes, list, get and set asked directly (no daemon) on both backends."""
     peer = start_script("lifecycle_peer.py")
     ros2_sees(ros2, [NODE])
+    for args in (["nodes"], ["list", NODE]):
+        same_as_ros2(tool, ros2, ["lifecycle", *args], attempts=3)
     steps = [("configure", "inactive [2]"), ("3", "active [3]"), ("deactivate", "inactive [2]"),
              ("cleanup", "unconfigured [1]")]  # fmt: skip
     for number, (transition, state) in enumerate(steps, start=1):
