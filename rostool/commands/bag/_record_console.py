@@ -44,9 +44,9 @@ class RecordDashboard:
         from rostool.graph.rates import format_bytes
 
         elapsed = int(now - self._started)
-        state = "  [PAUSED]" if status.paused else ""
+        state = " [PAUSED]" if status.paused else ""
         if status.buffered is not None:
-            state += f"  [SNAPSHOT MODE: {status.buffered} msgs buffered]"
+            state += f" [SNAPSHOT MODE: {status.buffered} msgs buffered]"
         rows = [("topic", "msgs", "rate", "bandwidth", "written", "dropped", "throttled")]
         then, before = self._history[0]
         span = now - then
@@ -61,10 +61,10 @@ class RecordDashboard:
         widths = [max(len(row[i]) for row in rows) for i in range(len(rows[0]))]
         table = ["  " + "  ".join(c.ljust(w) if i == 0 else c.rjust(w) for i, (c, w) in
                  enumerate(zip(row, widths, strict=True))) for row in rows]  # fmt: skip
-        header = (
-            f" recording {self._path}: {status.messages} msgs on {status.topics} topic"
-            f"{'' if status.topics == 1 else 's'}, {format_bytes(self._bytes)}, "
-            f"{elapsed // 60:02d}:{elapsed % 60:02d}{state}"
+        header = (  # the state first: a long path is what the terminal's width cuts off
+            f" recording{state} {elapsed // 60:02d}:{elapsed % 60:02d}, {status.messages} msgs on "
+            f"{status.topics} topic{'' if status.topics == 1 else 's'}, {format_bytes(self._bytes)}: "
+            f"{self._path}"
         )
         return [header, *table]
 
