@@ -88,11 +88,13 @@ def test_node_list_and_info_show_both_processes(env: dict[str, str], chatter: su
 def test_hz_and_bw_count_a_rostool_publisher(env: dict[str, str]) -> None:
     pub = rostool_popen(["topic", "pub", "/fast", "std_msgs/Int32", "data: 7", "-r", "20"], env)
     try:
+        # side by side (bw measures sizes, not time), so the suite's serial end is one window long
+        measuring = rostool_popen(["topic", "bw", "/fast", "--duration", "2.2"], env)
         out = rostool(["topic", "hz", "/fast", "--json", "--duration", "3.2"], env).stdout
+        bw = measuring.communicate(timeout=30)[0]
         reports = [json.loads(line) for line in out.splitlines()]
         assert reports, out
         assert abs(reports[-1]["rate"] - 20.0) < 2.0, reports[-1]
-        bw = rostool(["topic", "bw", "/fast", "--duration", "2.2"], env).stdout
         # std_msgs/Int32 in CDR: 4 bytes of encapsulation header + 4 bytes of data
         assert "Message size mean: 8 B min: 8 B max: 8 B" in bw, bw  # ros2 topic bw's form
     finally:
