@@ -13,7 +13,6 @@ import json
 import re
 import subprocess
 import sys
-import time
 from collections.abc import Callable
 from pathlib import Path
 
@@ -28,7 +27,7 @@ from tests.ros2_peers import (
     rostool_rclpy,
     rostool_rclpy_popen,
 )
-from tests.support import rostool, stop
+from tests.support import Watched, rostool, stop, wait_until
 
 Start = Callable[..., RclpyPeer]
 
@@ -249,14 +248,15 @@ def test_hz_at_10_hz_and_1_khz(
     true_rate = (during[-1]["count"] - during[0]["count"]) / (during[-1]["t"] - during[0]["t"])
     assert abs(reports[-1]["rate"] - true_rate) / true_rate < 0.02, (true_rate, reports[-1])
 
-    hz = rostool_rclpy_popen(["topic", "hz", "/fast", "--json"], graph_env, tmp_path, distro)
+    hz = Watched(rostool_rclpy_popen(["topic", "hz", "/fast", "--json"], graph_env, tmp_path, distro))
     try:
         fast = start_peer("--name", "fast", "--talk", "/fast", "--rate", "1000", "--depth", "1000",
                           "--count", "3000", "--subs", "1")  # fmt: skip
         sent = fast.wait_for("sent", timeout=60)
-        time.sleep(2.0)  # hz reports once a second
+        hz.wait_for(lambda out: any(json.loads(line)["received"] == 3000 for line in out.splitlines()
+                                    if line.startswith("{")), timeout=10)  # fmt: skip
     finally:
-        out, _err = stop(hz)
+        out, _err = hz.stop()
     last = [json.loads(line) for line in out.splitlines() if line.startswith("{")][-1]
     true_rate = (sent["count"] - 1) / sent["seconds"]
     assert last["received"] == 3000, last
@@ -417,7 +417,8 @@ def test_ctrl_c_ends_a_waiting_service_call_quietly(
 ) -> None:
     args = ["service", "call", "/later", "std_srvs/srv/SetBool", "{data: true}", "--wait"]
     waiting = rostool_rclpy_popen(args, graph_env, tmp_path, distro)
-    time.sleep(3.0)
+    # in the graph (its participant's sockets are open), so Ctrl+C comes while it waits for the service
+    assert wait_until(lambda: bound_addresses(waiting.pid) != [] or waiting.poll() is not None, timeout=30)
     assert waiting.poll() is None, waiting.communicate()
     out, err = stop(waiting, timeout=10)
     assert waiting.returncode == 130, err
