@@ -278,6 +278,16 @@ CASES = [
          normalize=service_wait),
     case("action send_goal", "(not a goal field)", "action", "send_goal", "/fibonacci",
          "test_msgs/action/Fibonacci", "{ordr: 3}", error=True),
+    # --- facts of ros2topic's test_echo_pub.py ---
+    case("topic pub", "-t --max-wait-time-secs (no subscriber)", "topic", "pub", "-t", "5",
+         "--max-wait-time-secs", "1", "/parity_unread", "std_msgs/String", "data: hello", error=True,
+         normalize=subscription_wait),
+    case("topic pub", "--max-wait-time-secs (alone)", "topic", "pub", "--max-wait-time-secs", "1",
+         "/parity_unread", "std_msgs/String", "data: hello", error=True),
+    case("topic pub", "-t -w 0", "topic", "pub", "-t", "3", "-w", "0", "-r", "5", "/parity_unread",
+         "std_msgs/String", "data: hello"),
+    case("topic echo", "--timeout (no publisher)", "topic", "echo", "--timeout", "1", "/parity_silent",
+         "std_msgs/msg/String"),
     # --- QoS: history, liveliness, lease ---
     case("topic echo", "--qos-history", "topic", "echo", "--once", "--qos-history", "keep_all", "/chatter",
          normalize=digits_zeroed),
@@ -337,6 +347,15 @@ DELIBERATE: dict[str, Deliberate] = {
         "subscribers discovery shows (a few seconds at most), so it never hangs on a topic nobody reads; "
         "-w N waits as ros2 does",
         lambda ros2, tool: tool.code == 0 and tool.stdout == subscription_wait(ros2.stdout),
+    ),
+    "topic echo --timeout 1 /parity_silent std_msgs/msg/String": (
+        "an echo whose --timeout passed without a message exits 1 with one line saying so (ros2 exits 0 "
+        "silently), so a script can tell that nothing arrived",
+        lambda ros2, tool: (
+            tool.code == 1
+            and not tool.stdout
+            and tool.stderr_lines[-1:] == ["rostool: no message within 1 s"]
+        ),
     ),
     "interface list": (
         "rostool needs no ROS install: it lists the interfaces it carries (rosbags' store of the distro), "

@@ -89,6 +89,7 @@ def pub(
         say: Callable[[str], None] = (lambda _t: None) if quiet else click.echo
         if graph.style == "ros2" and not latch and not file:
             total = 1 if once else times if times is not None else count
+            wait_matching = _ros2_wait(wait_matching, max_wait, once or times is not None)
             plan = Ros2Publication(rate or 1.0, total, wait_matching, max_wait, keep_alive)
             publish_ros2(
                 graph, name, type_name, values, plan, click.echo, _printer(0 if quiet else print_nth)
@@ -100,6 +101,20 @@ def pub(
         )  # fmt: skip
     finally:
         graph.close()
+
+
+def _ros2_wait(wait_matching: int | None, max_wait: float | None, counted: bool) -> int | None:
+    """ros2 topic pub's -w with --max-wait-time-secs: it bounds a wait for subscriptions, so it needs one
+    (-w N, or -1/-t, which then wait for one as ros2's do). rostool's -m 0 (ros2 takes only S > 0): no
+    wait."""
+    if not max_wait:
+        return wait_matching
+    if wait_matching == 0 or (wait_matching is None and not counted):
+        raise RostoolError(
+            "--max-wait-time-secs option is only effective with --wait-matching-subscriptions, --once or "
+            "--times"
+        )
+    return 1 if wait_matching is None else wait_matching
 
 
 def _printer(print_nth: int) -> Callable[[int, Any], None] | None:
