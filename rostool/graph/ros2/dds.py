@@ -196,6 +196,17 @@ POLICY_NAMES = {
 }  # fmt: skip
 
 
+def wakeable_waitset(participant: Any) -> Any:
+    """A cyclonedds WaitSet with a guard condition attached as `wakeup`: `wakeup.set(True)` ends a wait in
+    progress at once (WaitSet.set_trigger does not: the wait runs to its timeout)."""
+    from cyclonedds.core import GuardCondition, WaitSet
+
+    waitset = WaitSet(participant)
+    waitset.wakeup = GuardCondition(participant)
+    waitset.attach(waitset.wakeup)
+    return waitset
+
+
 class Participant:
     """One DDS domain participant configured like an rmw_cyclonedds_cpp context."""
 

@@ -336,9 +336,11 @@ class DdsSubscription(DrainingSubscription):
         return self._graph.session.cache.started
 
     def _wake(self) -> None:
+        # a guard condition: cyclonedds' WaitSet.set_trigger does not wake a wait in progress (the
+        # reading thread then noticed the close only with its next sample or its 250 ms timeout)
         waitset = self._waitset
         if waitset is not None:
-            waitset.set_trigger(True)
+            waitset.wakeup.set(True)
 
     def _endpoints(self) -> list[EndpointView]:
         self._graph.session.cache.poll()
@@ -373,13 +375,15 @@ class DdsSubscription(DrainingSubscription):
 
     def _read_with(self, store_name: str, profile: QosProfile) -> QosProfile | None:
         from cyclonedds._clayer import ddspy_take  # type: ignore[import-not-found]
-        from cyclonedds.core import ReadCondition, WaitSet
+        from cyclonedds.core import ReadCondition
         from cyclonedds.util import duration
+
+        from rostool.graph.ros2.dds import wakeable_waitset
 
         session = self._graph.session
         reader = session.reader(topic_to_dds(self._topic), store_name, self._cache_profile(profile))
         self._reader = reader
-        waitset = WaitSet(session.participant.dp)
+        waitset = wakeable_waitset(session.participant.dp)
         waitset.attach(ReadCondition(reader, _ANY_SAMPLE))
         self._waitset = waitset
         receive = self._receiver(store_name)

@@ -203,7 +203,9 @@ class ServiceServer:
     """Serves one service from a thread: `handler(request) -> response message`."""
 
     def __init__(self, session: Any, service: str, srv_type: str, handler: Callable[[Any], object]) -> None:
-        from cyclonedds.core import ReadCondition, WaitSet
+        from cyclonedds.core import ReadCondition
+
+        from rostool.graph.ros2.dds import wakeable_waitset
 
         self._types: TypeSupport = session.types
         self.service = service
@@ -212,7 +214,7 @@ class ServiceServer:
         self._writer = session.writer(reply_topic(service), self.response_type, SERVICE_QOS, True)
         self._handler = handler
         self._closed = threading.Event()
-        self._waitset = WaitSet(session.participant.dp)
+        self._waitset = wakeable_waitset(session.participant.dp)
         self._waitset.attach(ReadCondition(self._reader, _ANY_SAMPLE))
         self._thread = threading.Thread(target=self._serve, name=f"ros2 service {service}", daemon=True)
         self._thread.start()
@@ -247,5 +249,5 @@ class ServiceServer:
 
     def close(self) -> None:
         self._closed.set()
-        self._waitset.set_trigger(True)
+        self._waitset.wakeup.set(True)
         self._thread.join(2.0)
