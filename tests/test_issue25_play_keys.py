@@ -36,11 +36,11 @@ def test_right_arrow_steps_and_up_down_change_the_rate(tmp_path: Path) -> None:
     play = ["--ros2", "bag", "play", str(TALKER), "--topics", "/topic", "-p", "--wait-for-subscribers"]
     term = Terminal(play, env, tmp_path)
     try:
-        assert term.wait_for(lambda s: "Press CURSOR_RIGHT for Play Next Message" in s, 30), term.screen()
+        assert term.wait_for(lambda s: "Press CURSOR_RIGHT for Play Next Message" in s, 60), term.screen()
         assert term.wait_for(lambda s: "[PAUSED ]" in s), term.screen()
         for step in (1, 2):
             term.send("Right")
-            assert echo.wait_for(lambda out, n=step: out.count("\n") >= n, 10), echo.stdout
+            assert echo.wait_for(lambda out, n=step: out.count("\n") >= n, 20), echo.stdout
         term.send("Up")
         assert term.wait_for(lambda s: "Set rate to 1.1" in s and "Rate: 1.1" in s), term.screen()
         term.send("Down")
@@ -49,8 +49,8 @@ def test_right_arrow_steps_and_up_down_change_the_rate(tmp_path: Path) -> None:
         assert term.wait_for(lambda s: "Set rate to 0.891" in s and "Rate: 0.891" in s), term.screen()
         assert received(echo) == expected[:2]  # still paused: exactly the two stepped messages
         term.send("Space")
-        assert term.wait_for(lambda s: "[exit 0]" in s, 30), term.screen()
-        assert echo.wait_for(lambda out: out.count("\n") >= 10, 10), echo.stdout
+        assert term.wait_for(lambda s: "[exit 0]" in s, 60), term.screen()
+        assert echo.wait_for(lambda out: out.count("\n") >= 10, 20), echo.stdout
     finally:
         term.close()
         echo.stop()
