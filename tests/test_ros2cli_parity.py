@@ -49,7 +49,7 @@ from tests.parity_ros2cli import (
 from tests.support import ros2_env
 
 TALKER = ["--name", "parity_talker", "--talk", "/chatter", "--rate", "5", "--stamped", "/stamped"]
-HIDER = ["--name", "parity_hider", "--talk", "/_parity_hidden", "--rate", "2"]  # a hidden topic
+HIDER = ["--name", "_parity_hider", "--talk", "/_parity_hidden", "--rate", "2"]  # a hidden node and topic
 SERVER = ["--name", "parity_server", "--params", "--service", "/set_flag", "--action", "/fibonacci",
           "--step", "0.05", "--listen", "/chatter", "--listen", "/parity_pub"]  # fmt: skip
 
@@ -57,7 +57,8 @@ SERVER = ["--name", "parity_server", "--params", "--service", "/set_flag", "--ac
 def _ready(graph: ParityGraph) -> bool:
     """The daemon knows every node, topic endpoint, service and action of the module's graph."""
     checks = (
-        (["node", "list"], ("/parity_hider\n", "/parity_server\n", "/parity_talker\n")),
+        (["node", "list"], ("/parity_server\n", "/parity_talker\n")),
+        (["node", "list", "-a"], ("/_parity_hider\n",)),
         (
             ["service", "list"],
             ("/set_flag\n", "/parity_server/set_parameters\n", "/parity_talker/get_parameters\n"),
@@ -278,6 +279,18 @@ CASES = [
          normalize=service_wait),
     case("action send_goal", "(not a goal field)", "action", "send_goal", "/fibonacci",
          "test_msgs/action/Fibonacci", "{ordr: 3}", error=True),
+    # --- facts of ros2node's, ros2service's and ros2action's test_cli.py: hidden nodes and services ---
+    listing("node list", "-c -a", "node", "list", "-c", "-a"),
+    listing("node info", "(hidden node)", "node", "info", "/_parity_hider", error=True),
+    listing("node info", "--include-hidden (hidden node)", "node", "info", "--include-hidden",
+            "/_parity_hider"),
+    listing("service list", "--include-hidden-services", "service", "list", "--include-hidden-services"),
+    listing("service find", "--include-hidden-services", "service", "find", "--include-hidden-services",
+            "rcl_interfaces/srv/GetParameters"),
+    listing("action type", "", "action", "type", "/fibonacci"),
+    listing("service info", "", "service", "info", "/set_flag"),
+    listing("service info", "(unknown service)", "service", "info", "/parity_nothing", error=True),
+    listing("action type", "(unknown action)", "action", "type", "/parity_nothing", error=True),
     # --- facts of ros2topic's test_echo_pub.py ---
     case("topic pub", "-t --max-wait-time-secs (no subscriber)", "topic", "pub", "-t", "5",
          "--max-wait-time-secs", "1", "/parity_unread", "std_msgs/String", "data: hello", error=True,
@@ -452,7 +465,7 @@ VERBS = tuple(
     f"{tool} {verb}"
     for tool, verbs in (
         ("node", "list info"), ("topic", "list info type find echo hz bw delay pub"),
-        ("service", "list type find call echo"), ("action", "list info send_goal"),
+        ("service", "list type find call echo info"), ("action", "list info send_goal type"),
         ("param", "list get set delete describe dump load"),
         ("interface", "list show proto package packages"),
     )

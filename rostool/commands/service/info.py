@@ -4,7 +4,13 @@ from __future__ import annotations
 
 import click
 
-from rostool.commands._common import interfaces_option, json_option, live_graph, print_json
+from rostool.commands._common import (
+    ignored_ros2_options,
+    interfaces_option,
+    json_option,
+    live_graph,
+    print_json,
+)
 from rostool.errors import RostoolError
 
 
@@ -13,6 +19,7 @@ from rostool.errors import RostoolError
 @click.option("-v", "--verbose", is_flag=True, help="ROS 2: each client and server with node, GIDs, QoS.")
 @interfaces_option
 @json_option
+@ignored_ros2_options("no_daemon", "spin_time", "use_sim_time")
 @click.pass_context
 def info(
     ctx: click.Context, name: str, verbose: bool, interface_paths: tuple[str, ...], as_json: bool
