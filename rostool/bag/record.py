@@ -394,7 +394,7 @@ class Recorder:
                         self._subscribe(name)
             wait_ready = getattr(self.source, "wait_ready", None)
             if wait_ready is not None:  # ROS 2: --duration counts from when the subscriptions record
-                wait_ready()
+                wait_ready(stop=stop)
             started = time.monotonic()
             if options.all_topics or options.regex or options.node or options.wanted:
                 threading.Thread(

@@ -3,6 +3,7 @@ either transport; samples stay CDR bytes."""
 
 from __future__ import annotations
 
+import threading
 import time
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
@@ -61,13 +62,14 @@ class Ros2Source:
         subscription = self.graph.subscribe(topic, on_message, lambda text: self.warn(f"{topic}: {text}"))
         self._subscriptions.append(subscription)
 
-    def wait_ready(self, timeout: float = START_WAIT_SECONDS) -> None:
+    def wait_ready(self, timeout: float = START_WAIT_SECONDS, stop: threading.Event | None = None) -> None:
         """Return once the subscriptions made so far record: each has matched the publishers discovery
         knew when its reader was made (the transport's matched count). A topic whose publisher is not
         known yet is waited for only READY_GRACE s after another one matched (discovery brings a peer's
         endpoints together: it is unpublished, or its publisher is still far), and `timeout` s at most.
         The recorder calls this before it starts --duration's clock, so 3 s of recording are 3 s of
-        messages, not a discovery and the rest."""
+        messages, not a discovery and the rest. Ends at once when `stop` is set (Ctrl+C)."""
+        stop = stop or threading.Event()
         deadline = time.monotonic() + timeout
         grace_ends: float | None = None
         while (now := time.monotonic()) < deadline:
@@ -78,7 +80,8 @@ class Ros2Source:
                 grace_ends = now + READY_GRACE
             if grace_ends is not None and now >= grace_ends and not any(_has_publishers(s) for s in waiting):
                 return
-            time.sleep(0.005)
+            if stop.wait(0.005):
+                return
 
     def describe(self, topic: str, origin: Any) -> dict[str, str]:
         """The bag's view of the topic: its ROS 2 type and whether its publishers latch."""
