@@ -291,6 +291,13 @@ CASES = [
     listing("service info", "", "service", "info", "/set_flag"),
     listing("service info", "(unknown service)", "service", "info", "/parity_nothing", error=True),
     listing("action type", "(unknown action)", "action", "type", "/parity_nothing", error=True),
+    # --- facts of ros2interface's test_cli.py ---
+    case("interface package", "-m", "interface", "package", "std_msgs", "-m", normalize=sorted_lines),
+    case("interface package", "-s", "interface", "package", "std_srvs", "-s", normalize=sorted_lines),
+    case("interface package", "-a (none)", "interface", "package", "std_msgs", "-a"),
+    case("interface show", "(unknown package)", "interface", "show", "not_a_package/msg/String", error=True),
+    case("interface show", "(service)", "interface", "show", "std_srvs/srv/Empty"),
+    case("interface show", "- (stdin)", "interface", "show", "-", stdin="std_srvs/srv/Empty\n"),
     # --- facts of ros2topic's test_echo_pub.py ---
     case("topic pub", "-t --max-wait-time-secs (no subscriber)", "topic", "pub", "-t", "5",
          "--max-wait-time-secs", "1", "/parity_unread", "std_msgs/String", "data: hello", error=True,
