@@ -133,7 +133,9 @@ class DaemonClient:
     def start_detached(self, idle: float | None = None, replacing: bool = False) -> subprocess.Popen[bytes]:
         """Start the daemon in its own session, its output in its log; the caller does not wait for it."""
         log_dir = private_dir(state_dir(self.env))
-        env = {**self.env, NO_DAEMON_ENV: "1"}
+        # glibc's per-thread malloc arenas (DDS runs many threads) grow a long-lived process's RSS slowly
+        # under churn (about 0.1 MiB a minute in bench/soak_daemon.py); two arenas keep it flat
+        env = {"MALLOC_ARENA_MAX": "2", **self.env, NO_DAEMON_ENV: "1"}
         args = [sys.executable, "-m", "rostool.graph.daemon", "--backend", self.requested]
         if idle is not None:
             args += ["--idle", str(idle)]

@@ -8,6 +8,7 @@ than this process was seen, at most SETTLE_MAX_SECONDS when nothing is), as disc
 
 from __future__ import annotations
 
+import contextlib
 import time
 from collections.abc import Callable, Iterable
 from typing import TYPE_CHECKING, Any
@@ -189,7 +190,20 @@ class RclpyGraph(Ros2Base):
         self._long_lived = True
 
     def wait_for_newcomers(self, limit: float = 1.0, ignore: bytes | None = None) -> None:
-        """rmw folds in what discovery brings on its own threads: nothing to wait for."""
+        """rmw folds in what discovery brings on its own threads: nothing to wait for; a long-lived graph
+        notes which nodes have shown endpoints (the daemon calls this every moment), so that one which
+        comes and goes between two queries is known for gone when rmw keeps its name."""
+        if not self._long_lived:
+            return
+        listed = set()
+        for name, namespace in self.node.get_node_names_and_namespaces():
+            full = self.full_name(name, namespace)
+            listed.add(full)
+            if full not in self._described:
+                with contextlib.suppress(RostoolError):
+                    if any(self._node_endpoints(full)):
+                        self._described.add(full)
+        self._described &= listed
 
     @staticmethod
     def _range_hint() -> str:
