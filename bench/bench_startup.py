@@ -81,7 +81,9 @@ def main() -> None:
     parser.add_argument("--runs", type=int, default=5)
     parser.add_argument("--backend", action="append", choices=("dds", "rclpy"))
     parser.add_argument("--daemon", action="store_true", help="rostool through its warm graph daemon")
-    parser.add_argument("--what", action="append", choices=("echo", "pub", "record", "phases", "linger"))
+    parser.add_argument(
+        "--what", action="append", choices=("echo", "pub", "record", "phases", "linger", "call")
+    )
     args = parser.parse_args()
     backends = args.backend or ["dds", "rclpy"]
     what = args.what or ["echo", "pub", "record"]
@@ -108,7 +110,23 @@ def main() -> None:
         for _label, command, tool_env in tools[:-1]:
             subprocess.run([*command, "daemon", "start"], env=tool_env, capture_output=True, timeout=60)
     talker = RclpyPeer(args.distro, env, scratch, ["--name", "talker", "--talk", "/t", "--rate", "10"])
-    listener = RclpyPeer(args.distro, env, scratch, ["--name", "listener", "--listen", "/heard"])
+    listener = RclpyPeer(
+        args.distro,
+        env,
+        scratch,
+        [
+            "--name",
+            "listener",
+            "--listen",
+            "/heard",
+            "--service",
+            "/set_flag",
+            "--action",
+            "/fibonacci",
+            "--step",
+            "0.01",
+        ],
+    )
     peers = [talker, listener]
     try:
         for peer in peers:
@@ -123,6 +141,8 @@ def main() -> None:
             bench_record(tools, args.runs, scratch)
         if "phases" in what:
             bench_phases(tools, args.runs)
+        if "call" in what:
+            bench_calls(tools, args.runs, listener)
         if "linger" in what:
             bench_linger(args.distro, env, scratch, args.runs)
     finally:
@@ -224,6 +244,27 @@ def bench_phases(tools: list[Tool], runs: int) -> None:
                 column.append(value)
         for step, values in zip(steps, found, strict=True):
             print(row(f"{label}: in-process, {step} after", values))
+
+
+def bench_calls(tools: list[Tool], runs: int, server: RclpyPeer) -> None:
+    """service call and action send_goal of the real node's server: wall time, and whether it answered."""
+    goal = ["action", "send_goal", "/fibonacci", "test_msgs/action/Fibonacci", "{order: 3}"]
+    verbs = {
+        "service call": (["service", "call", "/set_flag", "std_srvs/srv/SetBool", "{data: true}"], "success"),
+        "action send_goal": (goal, "SUCCEEDED"),
+    }
+    for name, (verb, answer) in verbs.items():
+        times: dict[str, list[float]] = {label: [] for label, _c, _e in tools}
+        good: dict[str, int] = dict.fromkeys(times, 0)
+        for _ in range(runs):
+            for label, command, env in tools:
+                seconds, out, code = timed([*command, *verb], env)
+                times[label].append(seconds)
+                good[label] += code == 0 and answer in out
+        for label, values in times.items():
+            print(row(f"{label} {name}", values, extra=f"{good[label]}/{runs} answered"))
+    served = len(server.of("service"))
+    print(f"(the server logged {served} service requests)")
 
 
 NO_KEYHASH = (
