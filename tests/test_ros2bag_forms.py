@@ -122,7 +122,10 @@ RECORD_ERRORS = [
         "Cannot specify compression format without a compression mode",
     ),
     (["-a", "--use-sim-time", "--no-discovery"], "--use-sim-time and --no-discovery both set"),
-    (["-a", "--snapshot-mode"], "--snapshot-mode is not supported by rostool's recorder yet"),
+    (
+        ["-a", "--snapshot-mode", "--max-cache-size", "0"],
+        "In snapshot mode, either the max_cache_duration or max_cache_size shall not be set to zero",
+    ),
 ]
 
 

@@ -126,8 +126,10 @@ def check_flags(flags: RecordFlags) -> None:
         )
     if flags.compression_format and flags.compression_mode == "none":
         raise RostoolError("Invalid choice: Cannot specify compression format without a compression mode.")
-    if flags.snapshot_mode and flags.max_cache_size == 0:
-        raise RostoolError("--max-cache-size must be greater than 0 when --snapshot-mode is enabled")
+    if flags.snapshot_mode and flags.max_cache_size == 0 and not flags.max_cache_duration:
+        raise RostoolError(
+            "In snapshot mode, either the max_cache_duration or max_cache_size shall not be set to zero."
+        )  # rosbag2's own line
     if flags.max_bag_files and not (flags.max_bag_size or flags.max_bag_duration):
         raise RostoolError("--max-bag-files needs --max-bag-size or --max-bag-duration")
     warn = [
