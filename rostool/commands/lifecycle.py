@@ -30,8 +30,8 @@ def lifecycle() -> None:
       rostool --ros2 lifecycle list /camera           # the transitions available now
       rostool --ros2 lifecycle set /camera configure  # Transitioning successful
 
-    ros2cli flags with no meaning here (--spin-time, -s/--use-sim-time) are accepted and
-    ignored.
+    --spin-time S waits S seconds for discovery when no graph daemon answers (as ros2cli);
+    -s/--use-sim-time is accepted and ignored.
     """
 
 
