@@ -19,8 +19,16 @@ def _interrupted_while_starting(_signum: int, _frame: FrameType | None) -> None:
 signal.signal(signal.SIGINT, _interrupted_while_starting)
 
 
+def _terminated(_signum: int, _frame: FrameType | None) -> None:
+    """SIGTERM (`timeout`, `kill`, a supervisor) unwinds like Ctrl+C does, so what the verb opened is
+    closed: a ROS 2 participant announces it left instead of lingering in other nodes' view for its lease.
+    Verbs with their own meaning for it (bag record, core, the daemon) set their own handler."""
+    raise SystemExit(128 + signal.SIGTERM)
+
+
 def main() -> None:
     from rostool.cli import main as run
 
     signal.signal(signal.SIGINT, signal.default_int_handler)
+    signal.signal(signal.SIGTERM, _terminated)
     run()

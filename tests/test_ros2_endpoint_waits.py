@@ -7,6 +7,7 @@ publisher saw the match (tests/rclpy_peer.py's `matched` and `published` events)
 from __future__ import annotations
 
 import json
+import signal
 import struct
 from collections.abc import Callable
 from pathlib import Path
@@ -106,18 +107,23 @@ def subscribers_seen(watcher: RclpyPeer, topic: str) -> list[str]:
     return list(views[-1]["subscribers"].get(topic, [])) if views else []
 
 
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
 def test_an_exited_rostool_leaves_a_real_nodes_view_before_its_lease(
-    graph_env: dict[str, str], start_peer: Start
+    graph_env: dict[str, str], start_peer: Start, sig: signal.Signals
 ) -> None:
     """The DDS backend's reader is disposed so that Fast DDS honours it (Cyclone sends key hashes): gone
-    from a real node's view long before the 10 s lease that would otherwise remove it."""
+    from a real node's view long before the 10 s lease that would otherwise remove it, whether the echo
+    was ended by Ctrl+C or by SIGTERM (`timeout`, `kill`: it unwinds the same way, exit 143)."""
     start_peer("--name", "talker", "--talk", "/t", "--rate", "10")
     watcher = start_peer("--name", "watcher", "--watch")
     echo = Watched(rostool_popen(["topic", "echo", "/t"], graph_env))
     try:
         assert echo.wait_for(lambda out: "data: hello" in out, timeout=30), echo.stop()
         assert wait_until(lambda: subscribers_seen(watcher, "/t"), timeout=15), watcher.of("graph")[-1:]
+        echo.proc.send_signal(sig)
+        echo.proc.wait(timeout=10)
     finally:
-        echo.stop()
-    assert echo.proc.returncode in (0, 130)
+        _out, err = echo.stop()
+    assert echo.proc.returncode == (130 if sig == signal.SIGINT else 143), err
+    assert "Traceback" not in err
     assert wait_until(lambda: not subscribers_seen(watcher, "/t"), timeout=5), watcher.of("graph")[-1]
