@@ -209,7 +209,9 @@ class WarmDaemon:
         self.env = {**env, "ROSTOOL_NO_DAEMON": "", "XDG_RUNTIME_DIR": str(self.run_dir),
                     "XDG_STATE_HOME": str(self.run_dir / "state")}  # fmt: skip
         self._popen = popen or (lambda args, env: rostool_popen(["--ros2", *args], env))
-        self._starting: subprocess.Popen[str] | None = self._popen(["daemon", "start"], self.env)
+        # --idle: a daemon whose test was killed before its teardown does not hold the domain for hours
+        starting = self._popen(["daemon", "start", "--idle", "300"], self.env)
+        self._starting: subprocess.Popen[str] | None = starting
 
     def ready(self) -> None:
         if self._starting is None:
