@@ -92,6 +92,23 @@ def test_bag_record_duration_counts_from_the_match(tool: Tool, start_peer: Start
     assert len(numbers) >= 25, len(numbers)  # 30 on an idle machine (bench/bench_startup.py)
 
 
+def test_bag_record_no_discovery_keeps_the_topics_present_at_start(
+    tool_popen: ToolPopen, start_peer: Start, tmp_path: Path
+) -> None:
+    """`--no-discovery` records the topics published when it started, as discovery settled (a list frozen
+    before discovery answered was empty on the DDS backend)."""
+    talker = start_peer("--name", "talker", "--talk", "/t", "--rate", "10")
+    bag = tmp_path / "present"
+    recorder = tool_popen(["bag", "record", "-a", "--no-discovery", "-o", str(bag)])
+    try:
+        matched = first_match(talker)
+        talker.wait_for("published", lambda e: e["count"] >= matched + 5, timeout=30)
+    finally:
+        _out, err = stop(recorder, timeout=15)
+    assert recorder.returncode in (0, 130), err
+    assert len(numbers_in_bag(bag)) >= 4, err
+
+
 def test_pub_once_is_heard_by_the_real_listener(tool: Tool, start_peer: Start) -> None:
     listener = start_peer("--name", "listener", "--listen", "/heard")
     verb = ["topic", "pub", "--once", "/heard", "std_msgs/msg/String", "{data: 'just once'}"]

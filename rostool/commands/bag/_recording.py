@@ -64,7 +64,7 @@ def run_record(ctx: click.Context, request: RecordRequest) -> None:
         source = graph.record_source(warn, request.include_hidden)
         recorder = Recorder(source, options)
         if request.selector is not None and request.no_discovery:
-            request.selector.freeze(source.published_topics())
+            request.selector.freeze(source.topics_present())
         if ros2_form and not request.quiet and sys.stderr.isatty():  # piped: only warnings and the summary
             click.echo("[INFO] [rosbag2_recorder]: Listening for topics...", err=True)
             click.echo("[INFO] [rosbag2_recorder]: Recording...", err=True)

@@ -146,6 +146,9 @@ class Ros1Source:
         except RostoolError:
             return []  # the master is away: keep recording what is subscribed (as rosbag does)
 
+    def topics_present(self) -> list[str]:
+        return self.published_topics()  # the master's answer is whole at once
+
     def subscribed_topics(self, node: str) -> list[str]:
         return subscribed_by(self.graph, node)
 

@@ -3,11 +3,13 @@ either transport; samples stay CDR bytes."""
 
 from __future__ import annotations
 
+import contextlib
 import threading
 import time
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
+from rostool.errors import RostoolError
 from rostool.graph.recording import Encoding, Put, subscribed_by
 from rostool.interfaces.names import hidden_name
 
@@ -46,7 +48,10 @@ class Ros2Source:
         return self._visible(published)
 
     def topics_present(self) -> list[str]:
-        """Topics published at start-up, once discovery settled (--no-discovery's fixed list)."""
+        """Topics published at start-up, once discovery settled as for a listing (--no-discovery's fixed
+        list)."""
+        with contextlib.suppress(RostoolError):  # nothing answers: nothing is present
+            self.graph._listing()
         return self._visible(self.graph.published_topics())
 
     def _visible(self, topics: set[str]) -> list[str]:
