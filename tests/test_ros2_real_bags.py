@@ -16,10 +16,10 @@ from typing import TYPE_CHECKING
 import pytest
 
 from tests.ros2_peers import RclpyPeer
-from tests.support import TESTDATA, rostool
+from tests.support import TESTDATA, Watched, rostool
 
 if TYPE_CHECKING:
-    from tests.ros2_backends import Tool
+    from tests.ros2_backends import Tool, ToolPopen
 from tests.test_ros2_bag_record import foxglove_decoded
 
 Start = Callable[..., RclpyPeer]
@@ -39,12 +39,21 @@ def read_back(path: Path) -> dict[str, list[object]]:
 # the storage is the bag writer's business, not the backend's: .mcap covers the rclpy source
 @pytest.mark.parametrize(("suffix", "backend"), [(".mcap", "dds"), (".mcap", "rclpy"), (".db3", "dds")])
 def test_record_from_real_publishers(
-    start_peer: Start, tmp_path: Path, suffix: str, tool: Tool, backend: str
+    start_peer: Start, tmp_path: Path, suffix: str, tool_popen: ToolPopen, backend: str
 ) -> None:
-    start_peer("--name", "talker", "--talk", "/chatter", "--stamped", "/pose", "--rate", "50")
+    talker = start_peer("--name", "talker", "--talk", "/chatter", "--stamped", "/pose", "--rate", "50")
     out = tmp_path / f"real{suffix}"
-    done = tool(["bag", "record", "/chatter", "/pose", "-O", str(out), "--duration", "3", "-q"])
-    assert done.returncode == 0, done.stderr
+    recorder = Watched(tool_popen(["bag", "record", "/chatter", "/pose", "-O", str(out), "-q"]))
+    try:
+        # recording from when the talker sees the recorder on both topics, for 60 more messages (a fixed
+        # window was eaten by discovery on a loaded machine)
+        for topic in ("/chatter", "/pose"):
+            talker.wait_for("matched", lambda e, t=topic: e["topic"] == t and e["subscribers"] > 0, 30)
+        since = max(e["count"] for e in talker.of("matched") if e["topic"] == "/chatter")
+        talker.wait_for("published", lambda e: e["count"] >= since + 60, timeout=30)
+    finally:
+        _out, err = recorder.stop(timeout=20)
+    assert recorder.proc.returncode == 0, err
     recorded = read_back(out)
     # nothing lost between the first and the last message recorded (discovery takes about a second)
     numbers = [int(m.data.removeprefix("hello ")) for m in recorded["/chatter"]]  # type: ignore[attr-defined]
