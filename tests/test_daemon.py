@@ -280,7 +280,7 @@ def test_spin_time_is_the_direct_listings_discovery_wait(
     empty = tool(["node", "list", "--no-daemon", "--spin-time", "0.5"])
     assert empty.returncode == 1 and "within 0.5 s" in empty.stderr, empty.stderr
     # a node that starts after the listing did is listed: it spins its whole time (as ros2cli's DirectNode)
-    listing = tool_popen(["topic", "list", "--no-daemon", "--spin-time", "12"])
+    listing = tool_popen(["topic", "list", "--no-daemon", "--spin-time", "20"])
     start_peer("--name", "late_spinner", "--talk", "/late_spin")
     assert listing.poll() is None, "the listing answered before its spin time"
     out, err = listing.communicate(timeout=60)
