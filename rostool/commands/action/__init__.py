@@ -34,6 +34,6 @@ def action() -> None:
       rostool --ros2 action send_goal -f /fibonacci test_msgs/action/Fibonacci "{order: 5}"
 
     Flags and output follow the selected ROS version: actionlib's tools' under ROS 1, ros2 action's under
-    ROS 2 (send_goal is send-goal). --json works in both. ros2cli flags with no meaning here (--spin-time,
-    -s/--use-sim-time) are accepted and ignored.
+    ROS 2 (send_goal is send-goal). --json works in both. --spin-time S waits S seconds for discovery when
+    no graph daemon answers, as ros2cli's does; -s/--use-sim-time is accepted and ignored.
     """

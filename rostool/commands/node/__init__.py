@@ -15,8 +15,8 @@ def node() -> None:
     """Inspect and stop nodes (like rosnode, or ros2 node).
 
     Flags and output follow the selected ROS version (--ros1/--ros2, ROS_VERSION, detection): rosnode's
-    forms under ROS 1, ros2 node's under ROS 2; --json works in both. ros2cli flags with no meaning here
-    (--spin-time, -s/--use-sim-time) are accepted and ignored.
+    forms under ROS 1, ros2 node's under ROS 2; --json works in both. --spin-time S waits S seconds for
+    discovery when no graph daemon answers, as ros2cli's does; -s/--use-sim-time is accepted and ignored.
 
     \b
     Examples:

@@ -27,7 +27,7 @@ def param() -> None:
       rostool --ros2 param get /talker use_sim_time     # ROS 2: NODE then PARAM
       rostool --ros2 param dump /talker > talker.yaml
 
-    Flags and output follow the selected ROS version: rosparam's under ROS 1, ros2 param's under ROS 2
-    (NODE first, --include-hidden-nodes, --timeout). --json works in both. ros2cli flags with no meaning
-    here (--spin-time, -s/--use-sim-time) are accepted and ignored.
+    Flags and output follow the selected ROS version: rosparam's under ROS 1, ros2 param's under ROS 2 (NODE
+    first, --include-hidden-nodes, --timeout). --json works in both. --spin-time S waits S seconds for
+    discovery when no graph daemon answers, as ros2cli's does; -s/--use-sim-time is accepted and ignored.
     """

@@ -30,7 +30,7 @@ def service() -> None:
       rostool --ros2 service info /add_two_ints
       rostool --ros2 service echo /add_two_ints      # needs the service's introspection on
 
-    Flags and output follow the selected ROS version: rosservice's under ROS 1, ros2 service's under
-    ROS 2. --json works in both. ros2cli flags with no meaning here (--spin-time,
-    -s/--use-sim-time) are accepted and ignored.
+    Flags and output follow the selected ROS version: rosservice's under ROS 1, ros2 service's under ROS 2.
+    --json works in both. --spin-time S waits S seconds for discovery when no graph daemon answers, as
+    ros2cli's does; -s/--use-sim-time is accepted and ignored.
     """

@@ -19,9 +19,9 @@ def topic() -> None:
     """Inspect and use topics (like rostopic, or ros2 topic).
 
     Flags and output follow the selected ROS version (--ros1/--ros2, ROS_VERSION, detection): rostopic's
-    forms under ROS 1, ros2 topic's under ROS 2. rostool's extras (several --field, --json, --filter,
-    --csv) work in both. ros2cli flags with no meaning here (--spin-time,
-    -s/--use-sim-time) are accepted and ignored.
+    forms under ROS 1, ros2 topic's under ROS 2. rostool's extras (several --field, --json, --filter, --csv)
+    work in both. --spin-time S waits S seconds for discovery when no graph daemon answers, as ros2cli's
+    does; -s/--use-sim-time is accepted and ignored.
 
     \b
     Examples:
