@@ -9,6 +9,7 @@ import sys
 import time
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 ROOT = Path(__file__).resolve().parent.parent
 VENV_PYTHON = str(ROOT / ".venv" / "bin" / "python")
@@ -113,3 +114,22 @@ def wait_subscribed(env: dict[str, str], topic: str, count: int, timeout: float 
             return
         time.sleep(0.1)
     sys.exit(f"only some subscribers of {topic} registered")
+
+
+def tear_down_ros2(env: dict[str, str], ros2_env: dict[str, str], ros2: str, peers: Sequence[Any],
+                   scratch: Path) -> None:  # fmt: skip
+    """The end of a ROS 2 bench: every rostool daemon and the real ros2's daemon stopped, then the peers
+    (tests.ros2_peers.RclpyPeer), each checked to have bound loopback only, and the scratch folder."""
+    import shutil
+
+    from tests.ros2_peers import assert_loopback_only
+
+    subprocess.run([VENV_PYTHON, "-m", "rostool", "daemon", "stop", "--all"], env=env, capture_output=True,
+                   timeout=60)  # fmt: skip
+    subprocess.run([ros2, "daemon", "stop"], env=ros2_env, capture_output=True, timeout=60)
+    for peer in peers:
+        addresses = peer.bound_addresses()
+        peer.stop()
+        assert_loopback_only(addresses)
+    shutil.rmtree(scratch, ignore_errors=True)
+    print(f"load average at end: {os.getloadavg()[0]:.1f}")

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import shutil
 import statistics
 import subprocess
 import tempfile
@@ -21,9 +20,9 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
-from _graph import VENV_PYTHON, ros2_env
+from _graph import VENV_PYTHON, ros2_env, tear_down_ros2
 
-from tests.ros2_peers import PEERS_DIR, RclpyPeer, assert_loopback_only, peer_env
+from tests.ros2_peers import PEERS_DIR, RclpyPeer, peer_env
 
 DISTRO = "jazzy"
 ROS2 = str(PEERS_DIR / DISTRO / "bin" / "ros2")
@@ -177,15 +176,7 @@ def main() -> None:
             quiet_ok += done.returncode == 0 and done.stdout == ""
         print(row("empty graph, warm: rostool topic list (dds)", quiet, quiet_ok))
     finally:
-        stop_all = [VENV_PYTHON, "-m", "rostool", "daemon", "stop", "--all"]
-        subprocess.run(stop_all, env=env, capture_output=True, timeout=60)
-        subprocess.run([ROS2, "daemon", "stop"], env=fast, capture_output=True, timeout=60)
-        for peer in peers:
-            addresses = peer.bound_addresses()
-            peer.stop()
-            assert_loopback_only(addresses)
-        shutil.rmtree(scratch, ignore_errors=True)
-    print(f"load average at end: {os.getloadavg()[0]:.1f}")
+        tear_down_ros2(env, fast, ROS2, peers, scratch)
 
 
 if __name__ == "__main__":

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import shutil
 import statistics
 import subprocess
 import tempfile
@@ -20,9 +19,9 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
-from _graph import VENV_PYTHON, ros2_env
+from _graph import VENV_PYTHON, ros2_env, tear_down_ros2
 
-from tests.ros2_peers import PEERS_DIR, RclpyPeer, assert_loopback_only, peer_env
+from tests.ros2_peers import PEERS_DIR, RclpyPeer, peer_env
 
 DISTRO = "jazzy"
 ROS2 = str(PEERS_DIR / DISTRO / "bin" / "ros2")
@@ -118,15 +117,7 @@ def main() -> None:
             print(f"| {verb} | {label} | {statistics.median(times):.2f} s | {min(times):.2f} | "
                   f"{max(times):.2f} | {sum(ok for _, ok in runs)}/{len(runs)} |")  # fmt: skip
     finally:
-        stop_all = [VENV_PYTHON, "-m", "rostool", "daemon", "stop", "--all"]
-        subprocess.run(stop_all, env=env, capture_output=True, timeout=60)
-        subprocess.run([ROS2, "daemon", "stop"], env=fast, capture_output=True, timeout=60)
-        for peer in peers:
-            addresses = peer.bound_addresses()
-            peer.stop()
-            assert_loopback_only(addresses)
-        shutil.rmtree(scratch, ignore_errors=True)
-    print(f"load average at end: {os.getloadavg()[0]:.1f}")
+        tear_down_ros2(env, fast, ROS2, peers, scratch)
 
 
 if __name__ == "__main__":

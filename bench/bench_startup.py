@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import shutil
 import signal
 import statistics
 import subprocess
@@ -26,7 +25,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from _graph import VENV_PYTHON, ros2_env
+from _graph import VENV_PYTHON, ros2_env, tear_down_ros2
 
 from tests.ros2_peers import PEERS_DIR, RclpyPeer, assert_loopback_only, peer_env
 
@@ -146,15 +145,7 @@ def main() -> None:
         if "linger" in what:
             bench_linger(args.distro, env, scratch, args.runs)
     finally:
-        stop = [VENV_PYTHON, "-m", "rostool", "daemon", "stop", "--all"]
-        subprocess.run(stop, env=env, capture_output=True, timeout=60)
-        subprocess.run([ros2, "daemon", "stop"], env=fast, capture_output=True, timeout=60)
-        for peer in peers:
-            addresses = peer.bound_addresses()
-            peer.stop()
-            assert_loopback_only(addresses)
-        shutil.rmtree(scratch, ignore_errors=True)
-    print(f"load average at end: {os.getloadavg()[0]:.1f}")
+        tear_down_ros2(env, fast, ros2, peers, scratch)
 
 
 def bench_echo(tools: list[Tool], runs: int) -> None:
