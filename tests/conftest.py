@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import fcntl
 import os
+import signal
 import subprocess
 from collections.abc import Iterator
 from pathlib import Path
@@ -21,6 +22,13 @@ from tests.support import (
     stop,
     wait_until,
 )
+
+# Tests end peers and rostool as Ctrl+C does (SIGINT). A suite started in the background by a
+# non-interactive shell (`./test.sh &`, CI runners' scripts) inherits SIGINT ignored, and so would every
+# process it starts: a peer would never see the signal. A handler set here is reset to the default in
+# children at exec.
+if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 # the real ROS 2 peers' fixtures (distro, graph_env, start_peer)
 pytest_plugins = ("tests.ros2_peers", "tests.ros2_backends")
