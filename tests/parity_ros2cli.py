@@ -76,6 +76,19 @@ def goal_ids(text: str) -> str:
     return re.sub(r"ID: [0-9a-f]{32}", "ID: <uuid>", text)
 
 
+def goal_accepted_first(text: str) -> str:
+    """Goal ids as in `goal_ids`, and "Goal accepted" before the first feedback: ros2 prints it when its
+    spin reaches the goal response, so feedback that arrived sooner is printed before it (an order ros2
+    does not define); rostool prints it first, always."""
+    text = goal_ids(text)
+    accepted = "Goal accepted with ID: <uuid>\n\n"
+    if accepted in text and "Feedback:\n" in text:
+        text = text.replace(accepted, "", 1)
+        first = text.index("Feedback:\n")
+        text = text[:first] + accepted + text[first:]
+    return text
+
+
 def gids(text: str) -> str:
     return re.sub(r"GID: [0-9a-f.]+", "GID: <gid>", text)
 

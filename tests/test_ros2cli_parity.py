@@ -35,6 +35,7 @@ from tests.parity_ros2cli import (
     Run,
     digits_zeroed,
     gids,
+    goal_accepted_first,
     goal_ids,
     judge,
     parity_graph,
@@ -150,7 +151,7 @@ CASES = [
         "/fibonacci",
         "test_msgs/action/Fibonacci",
         "{order: 3}",
-        normalize=goal_ids,
+        normalize=goal_accepted_first,
     ),
     # --- param ---
     case("param list", "NODE", "param", "list", "/parity_server"),
