@@ -19,11 +19,9 @@ import subprocess
 import sys
 import tempfile
 import time
-import xmlrpc.client
 from pathlib import Path
-from typing import Any
 
-from _graph import debian_env, free_port, ros1_env
+from _graph import debian_env, free_port, ros1_env, start_master
 from bench_bag_play import Receiver, write_bag
 
 
@@ -39,23 +37,8 @@ def main() -> None:
         port = free_port()
         env = ros1_env(port, work)
         os.environ.update({k: v for k, v in env.items() if k.startswith("ROS")})
-        master = subprocess.Popen(
-            ["rosmaster", "--core", "-p", str(port)],
-            env=debian_env(env),
-            stdout=subprocess.DEVNULL,
-            stderr=subprocess.DEVNULL,
-        )
+        master = start_master(env)
         try:
-            proxy: Any = xmlrpc.client.ServerProxy(env["ROS_MASTER_URI"])
-            deadline = time.monotonic() + 20
-            while True:
-                try:
-                    proxy.getPid("/bench")
-                    break
-                except OSError:
-                    if time.monotonic() > deadline:
-                        raise SystemExit("rosmaster did not start") from None
-                    time.sleep(0.05)
             receiver = Receiver()
             commands = {
                 "rostool": ([sys.executable, "-m", "rostool", "bag", "burst", "-d", "0"], env),
