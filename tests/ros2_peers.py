@@ -192,6 +192,20 @@ def graph_env() -> dict[str, str]:
     return ros2_env()
 
 
+def held_locks(run_dir: Path) -> list[int]:
+    """The pids of rostool graph daemons still holding a lock in the runtime directory `run_dir` (-1: a
+    holder that wrote no pid)."""
+    held = []
+    for lock in run_dir.glob("rostool/*.lock"):
+        with open(lock, encoding="utf-8") as handle:
+            try:
+                fcntl.flock(handle, fcntl.LOCK_SH | fcntl.LOCK_NB)
+            except BlockingIOError:
+                text = handle.read().strip()
+                held.append(int(text) if text.isdigit() else -1)
+    return held
+
+
 class WarmDaemon:
     """rostool's graph daemon for one test's graph, as a user runs every verb by default: `env` is the
     test's environment with the daemon allowed, in a runtime directory of its own (a short path: a Unix
@@ -229,15 +243,7 @@ class WarmDaemon:
 
     def held_locks(self) -> list[int]:
         """The pids of daemons still holding a lock in the runtime directory."""
-        held = []
-        for lock in self.run_dir.glob("rostool/*.lock"):
-            with open(lock, encoding="utf-8") as handle:
-                try:
-                    fcntl.flock(handle, fcntl.LOCK_SH | fcntl.LOCK_NB)
-                except BlockingIOError:
-                    text = handle.read().strip()
-                    held.append(int(text) if text.isdigit() else -1)
-        return held
+        return held_locks(self.run_dir)
 
     def stop(self) -> list[int]:
         """Stop every daemon of the runtime directory; the pids that had to be killed."""
@@ -252,13 +258,20 @@ class WarmDaemon:
         return left
 
 
-@pytest.fixture
-def warm_daemon(graph_env: dict[str, str]) -> Iterator[WarmDaemon]:
-    """The test's graph served by a graph daemon of its own (see WarmDaemon), stopped at the end."""
-    daemon = WarmDaemon(graph_env)
+@contextlib.contextmanager
+def serving(env: dict[str, str]) -> Iterator[WarmDaemon]:
+    """A WarmDaemon of `env`, stopped at the end; no daemon may be left running."""
+    daemon = WarmDaemon(env)
     yield daemon
     left = daemon.stop()
     assert not left, f"graph daemons still running after `daemon stop --all`: {left}"
+
+
+@pytest.fixture
+def warm_daemon(graph_env: dict[str, str]) -> Iterator[WarmDaemon]:
+    """The test's graph served by a graph daemon of its own (see WarmDaemon), stopped at the end."""
+    with serving(graph_env) as daemon:
+        yield daemon
 
 
 @pytest.fixture

@@ -7,7 +7,6 @@ started."""
 from __future__ import annotations
 
 import contextlib
-import fcntl
 import json
 import os
 import shutil
@@ -21,7 +20,7 @@ from pathlib import Path
 import pytest
 
 from tests.ros2_backends import Tool
-from tests.ros2_peers import RclpyPeer
+from tests.ros2_peers import RclpyPeer, held_locks
 from tests.support import ros2_env, rostool, wait_until
 
 ListFn = Callable[..., "subprocess.CompletedProcess[str]"]
@@ -33,19 +32,6 @@ def _daemon_dirs(env: dict[str, str]) -> dict[str, str]:
     return {"XDG_RUNTIME_DIR": run, "XDG_STATE_HOME": os.path.join(run, "state"), **env}
 
 
-def _held_locks(run: Path) -> list[int]:
-    """The pids of daemons still holding a lock in `run`."""
-    held = []
-    for lock in run.glob("rostool/*.lock"):
-        with open(lock, encoding="utf-8") as handle:
-            try:
-                fcntl.flock(handle, fcntl.LOCK_SH | fcntl.LOCK_NB)
-            except BlockingIOError:
-                text = handle.read().strip()
-                held.append(int(text) if text.isdigit() else -1)
-    return held
-
-
 @pytest.fixture
 def graph_env() -> Iterator[dict[str, str]]:
     """The test's ROS 2 environment with the daemon allowed, in a runtime directory of its own; every
@@ -54,7 +40,7 @@ def graph_env() -> Iterator[dict[str, str]]:
     run = Path(env["XDG_RUNTIME_DIR"])
     yield env
     rostool(["daemon", "stop", "--all"], env)
-    left = [pid for pid in _held_locks(run) if pid > 0]
+    left = [pid for pid in held_locks(run) if pid > 0]
     for pid in left:
         with contextlib.suppress(ProcessLookupError):
             os.kill(pid, signal.SIGKILL)

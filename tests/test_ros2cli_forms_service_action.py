@@ -20,7 +20,7 @@ from typing import Any
 
 import pytest
 
-from tests.ros2_peers import PEERS_DIR, RclpyPeer, WarmDaemon, peer_python
+from tests.ros2_peers import PEERS_DIR, RclpyPeer, WarmDaemon, peer_python, serving
 from tests.support import Watched, rostool, rostool_popen, wait_until
 from tests.test_ros2cli_forms import Cases, Start
 
@@ -54,10 +54,8 @@ def service_env(graph_env: dict[str, str], distro: str) -> dict[str, str]:
 @pytest.fixture
 def service_daemon(service_env: dict[str, str]) -> Iterator[WarmDaemon]:
     """A warm graph daemon of service_env's own (its key includes AMENT_PREFIX_PATH), stopped at the end."""
-    daemon = WarmDaemon(service_env)
-    yield daemon
-    left = daemon.stop()
-    assert not left, f"graph daemons still running after `daemon stop --all`: {left}"
+    with serving(service_env) as daemon:
+        yield daemon
 
 
 @pytest.fixture
