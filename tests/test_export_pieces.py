@@ -16,7 +16,7 @@ from mcap.reader import make_reader
 from mcap.writer import CompressionType, Writer
 from rosbags.typesys import Stores, get_typestore
 
-from rostool.bag.export import ExportOptions
+from rostool.bag.export import ExportOptions, export_bag
 from rostool.bag.export_many import export_bags
 from rostool.bag.many import expand
 from rostool.bag.parquet_concat import concat
@@ -58,7 +58,7 @@ def _bag(path: Path, count: int = 6000, chunk_size: int = 16 * 1024) -> Path:
 
 
 def _export(bags: list[Path], out: Path, jobs: int, piece_bytes: int, keep_going: bool = False) -> int:
-    options = ExportOptions(fmt="parquet", out=out)
+    options = ExportOptions(fmt="parquet", out=out, row_group_rows=1000)  # several row groups per piece
     out.mkdir()
     return export_bags(expand(bags), options, None, jobs, keep_going, None, piece_bytes)[0].messages
 
@@ -142,3 +142,32 @@ def test_join_refuses_files_of_other_schemas(tmp_path: Path) -> None:
     shutil.copy(tmp_path / "one.parquet", tmp_path / "three.parquet")
     concat([tmp_path / "one.parquet", tmp_path / "three.parquet"], tmp_path / "both.parquet")
     assert pq.read_table(tmp_path / "both.parquet").column("a").to_pylist() == [1, 2, 1, 2]
+
+
+def test_batches_gather_into_row_groups_within_the_budget(tmp_path: Path) -> None:
+    """A chunk's few dozen messages are a batch; Parquet gets row groups of many batches (up to the rows or
+    bytes of a group, and early when the export's tables hold more than `held_bytes`): same table."""
+    bag = _bag(tmp_path / "small-chunks.mcap")
+    shapes = {
+        "gathered": {},  # defaults: the whole topic is one row group
+        "by-rows": {"row_group_rows": 2500},
+        "by-bytes": {"row_group_bytes": 200_000},
+        "per-batch": {"held_bytes": 1},  # over the budget at once: every batch written as it comes
+    }
+    tables = {}
+    for name, settings in shapes.items():
+        out = tmp_path / name
+        export_bag(bag, ExportOptions(fmt="parquet", out=out, **settings))
+        tables[name] = pq.ParquetFile(out / "imu.parquet")
+    groups = {name: [file.metadata.row_group(i).num_rows for i in range(file.num_row_groups)]
+              for name, file in tables.items()}  # fmt: skip
+    assert groups["gathered"] == [6000]
+    assert groups["by-rows"] == [2500, 2500, 1000]
+    assert len(groups["per-batch"]) > 100  # a chunk of 16 KiB holds ~45 Imu
+    assert 3 < len(groups["by-bytes"]) < len(groups["per-batch"])
+    whole = tables["gathered"].read()
+    assert all(file.read().equals(whole) for file in tables.values())
+    with bag.open("rb") as handle:  # against the mcap library's reading of the same bag
+        times = [m.log_time for _s, c, m in make_reader(handle).iter_messages() if c.topic == "/imu"]
+    assert whole.column(0).to_pylist() == times
+    assert whole.column("linear_acceleration.x").to_pylist() == [float(i) for i in range(6000)]

@@ -10,13 +10,14 @@ slash, with `/` replaced by `.` (`/turtle1/cmd_vel` -> `turtle1.cmd_vel`).
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from functools import partial
 from pathlib import Path
 from typing import Any
 
 from rostool.bag.export_columns import TypePlan
-from rostool.bag.export_tables import MemorySink, TableFormat, TopicTable
+from rostool.bag.export_tables import MemorySink, RowGroupBudget, TableFormat, TopicTable
 from rostool.bag.failures import warn
 from rostool.errors import RostoolError
 from rostool.interfaces.typestores import DEFAULT_DISTRO
@@ -36,6 +37,9 @@ class ExportOptions:
     distro: str = DEFAULT_DISTRO
     batch_rows: int = 8192
     batch_bytes: int = 32 * 1024 * 1024
+    row_group_rows: int = 1 << 20  # a Parquet row group: this many rows or bytes, whichever comes first
+    row_group_bytes: int = 64 * 1024 * 1024
+    held_bytes: int = 256 * 1024 * 1024  # what one export's Parquet tables hold back for row groups, at most
 
 
 @dataclass
@@ -137,8 +141,11 @@ def export_bag(
                 else:
                     chunked = chunked.share(*piece)
             at = piece[0] if piece is not None else None
+            new_table = partial(
+                _new_table, reader, options, style, partition, at, RowGroupBudget(options.held_bytes)
+            )
             if chunked is not None:
-                _export_chunks(reader, chunked, tables, options, style, partition, result, bar, at)
+                _export_chunks(reader, chunked, tables, new_table, result, bar)
             for conn, timestamp, data in reader.messages(conns) if conns and chunked is None else ():
                 result.messages += 1
                 if bar is not None and not result.messages % 1024:
@@ -158,7 +165,7 @@ def export_bag(
                 if options.fmt is None or options.out is None:
                     continue
                 if table is None:
-                    table = tables[topic] = _new_table(reader, conn, options, style, partition, at)
+                    table = tables[topic] = new_table(conn)
                 elif conn.msgtype != table.msgtype:
                     if topic not in skipped:
                         skipped.add(topic)
@@ -199,7 +206,13 @@ def _several_types(conns: Sequence[Any]) -> bool:
 
 
 def _new_table(
-    reader: Any, conn: Any, options: ExportOptions, style: Any, partition: str | None, piece: int | None
+    reader: Any,
+    options: ExportOptions,
+    style: Any,
+    partition: str | None,
+    piece: int | None,
+    budget: RowGroupBudget,
+    conn: Any,
 ) -> TopicTable:
     """A topic's table; Parquet tables decode raw messages column-wise (ColumnarDecoder)."""
     assert options.fmt is not None and options.out is not None
@@ -214,7 +227,7 @@ def _new_table(
 
         decoder = ColumnarDecoder(plan, conn.msgtype, columns[1:], reader.ros_version == 2, deserialize)
     where = table_path(options.out, conn.topic, options.fmt, partition, piece)
-    return TopicTable(conn.msgtype, columns, where, options, decoder)
+    return TopicTable(conn.msgtype, columns, where, options, decoder, budget)
 
 
 def _chunk_plan(reader: Any, conns: Sequence[Any], options: ExportOptions) -> Any:
@@ -236,12 +249,9 @@ def _export_chunks(
     reader: Any,
     chunked: Any,
     tables: dict[str, TopicTable],
-    options: ExportOptions,
-    style: Any,
-    partition: str | None,
+    new_table: Callable[[Any], TopicTable],
     result: ExportResult,
     bar: _Bar | None,
-    piece: int | None,
 ) -> None:
     """Each chunk's messages, channel by channel, straight into their tables."""
     from rostool.bag.mcap_batches import batches
@@ -251,7 +261,7 @@ def _export_chunks(
         if table is None:
             first = batch.buffer[batch.starts[0] : batch.starts[0] + batch.sizes[0]]
             reader.deserialize(first, conn)  # settles the type's definition, as the first message does
-            table = tables[conn.topic] = _new_table(reader, conn, options, style, partition, piece)
+            table = tables[conn.topic] = new_table(conn)
         elif conn.msgtype != table.msgtype:
             warn(f"{conn.topic}: left out its {conn.msgtype} messages (the table holds {table.msgtype})")
             continue

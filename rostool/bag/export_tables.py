@@ -1,5 +1,10 @@
 """One topic's table of `bag export`: rows buffered by column and written in batches, to Parquet, CSV or
-pyarrow Tables in memory, under a `.partial` name until complete."""
+pyarrow Tables in memory, under a `.partial` name until complete.
+
+Parquet tables gather their batches into row groups of `row_group_rows` rows or `row_group_bytes` bytes
+(Arrow's count), as Parquet readers like them: a row group per batch (8,192 rows) made footers of thousands
+of row groups, which cost readers and the join of a bag exported in pieces (parquet_concat.py) their Python
+time. What one export's tables hold back together stays under a `RowGroupBudget`."""
 
 from __future__ import annotations
 
@@ -17,13 +22,35 @@ class TableOptions(Protocol):
     fmt: TableFormat | None
     batch_rows: int
     batch_bytes: int
+    row_group_rows: int
+    row_group_bytes: int
+    held_bytes: int
+
+
+class RowGroupBudget:
+    """The bytes of batches that one export's Parquet tables hold back for their next row groups: past
+    `limit`, the table holding the most writes its row group early (memory stays bounded with many topics)."""
+
+    def __init__(self, limit: int) -> None:
+        self.limit = limit
+        self.sinks: list[ParquetSink] = []
+
+    def check(self) -> None:
+        while sum(sink.held_bytes for sink in self.sinks) > self.limit:
+            max(self.sinks, key=lambda sink: sink.held_bytes).write_group()
 
 
 class TopicTable:
     """One topic's rows, buffered by column and written in batches."""
 
     def __init__(
-        self, msgtype: str, columns: list[Column], path: Path, options: TableOptions, decoder: Any = None
+        self,
+        msgtype: str,
+        columns: list[Column],
+        path: Path,
+        options: TableOptions,
+        decoder: Any = None,
+        budget: RowGroupBudget | None = None,
     ) -> None:
         self.msgtype = msgtype
         self.columns = columns
@@ -41,7 +68,13 @@ class TopicTable:
             self.sink = MemorySink(columns)
             return
         path.parent.mkdir(parents=True, exist_ok=True)
-        self.sink = (ParquetSink if options.fmt == "parquet" else CsvSink)(self.partial, columns)
+        if options.fmt == "parquet":
+            budget = budget or RowGroupBudget(options.held_bytes)
+            self.sink = ParquetSink(
+                self.partial, columns, options.row_group_rows, options.row_group_bytes, budget
+            )
+        else:
+            self.sink = CsvSink(self.partial, columns)
 
     def add(self, msg: object, timestamp: int, size: int) -> None:
         self._times.append(timestamp)
@@ -128,7 +161,11 @@ class MemorySink(ArrowSink):
 
 
 class ParquetSink(ArrowSink):
-    def __init__(self, path: Path, columns: list[Column]) -> None:
+    """Batches held until they make a row group (see the module's docstring), then written."""
+
+    def __init__(
+        self, path: Path, columns: list[Column], group_rows: int, group_bytes: int, budget: RowGroupBudget
+    ) -> None:
         import pyarrow.parquet as pq
 
         super().__init__(columns)
@@ -138,14 +175,46 @@ class ParquetSink(ArrowSink):
         texts = [f.name for f in self.schema if pa.types.is_string(f.type) or pa.types.is_binary(f.type)]
         self.writer = pq.ParquetWriter(path, self.schema, compression="zstd", use_dictionary=texts)
         self._closed = False
+        self.group_rows, self.group_bytes = group_rows, group_bytes
+        self._held: list[Any] = []
+        self._held_rows = 0
+        self.held_bytes = 0
+        self.budget = budget
+        budget.sinks.append(self)
 
     def write_batch(self, batch: Any) -> None:
-        self.writer.write_batch(batch)
+        self._held.append(batch)
+        self._held_rows += batch.num_rows
+        self.held_bytes += batch.nbytes
+        if self._held_rows >= self.group_rows or self.held_bytes >= self.group_bytes:
+            self.write_group()
+        else:
+            self.budget.check()
+
+    def write_group(self) -> None:
+        """What is held as one row group; past `group_rows`, groups of exactly that many, the rest held."""
+        if not self._held:
+            return
+        table = self._pa.Table.from_batches(self._held, schema=self.schema)
+        self._held, self._held_rows, self.held_bytes = [], 0, 0
+        if table.num_rows > self.group_rows and not self._closed:
+            whole = table.num_rows - table.num_rows % self.group_rows
+            rest = table.slice(whole)
+            table = table.slice(0, whole)
+            if rest.num_rows:
+                self._held, self._held_rows, self.held_bytes = rest.to_batches(), rest.num_rows, rest.nbytes
+        self.writer.write_table(table, row_group_size=min(table.num_rows, self.group_rows) or 1)
 
     def close(self) -> None:
         if not self._closed:
             self._closed = True
-            self.writer.close()
+            try:
+                self.write_group()
+            finally:
+                self._held, self._held_rows, self.held_bytes = [], 0, 0
+                if self in self.budget.sinks:
+                    self.budget.sinks.remove(self)
+                self.writer.close()
 
 
 class CsvSink:
