@@ -27,7 +27,7 @@ import struct
 import time
 from collections.abc import Callable, Collection, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 from rosbags.interfaces import Connection, ConnectionExtRosbag1, ConnectionExtRosbag2
 
@@ -38,6 +38,9 @@ from rostool.errors import RostoolError
 from rostool.graph.base import Graph
 from rostool.interfaces.names import to_ros1_name
 from rostool.interfaces.ros1 import Ros1Type, builtin_store
+
+if TYPE_CHECKING:
+    from rostool.bag.player_services import Command, Controls
 
 _CLOCK = struct.Struct("<II")
 # rosbag2's key help, as `ros2 bag play` logs it ('s' and 't' work too)
@@ -110,6 +113,29 @@ class _Plan:
     clock: bool = False  # publish this message's time on /clock (ros2 bag play --clock-topics)
 
 
+@dataclass
+class _Burst:
+    """Messages to publish at once while paused (the right arrow: one; rosbag2's burst and play_next)."""
+
+    left: int | None  # None: the rest of the bag
+    command: Command | None = None  # the service request to answer when done
+    done: int = 0
+
+    def sent(self) -> bool:
+        """One more was published; True when that was the last."""
+        self.done += 1
+        if self.left is not None:
+            self.left -= 1
+        return self.left == 0
+
+    def reply(self) -> None:
+        if self.command is not None:
+            if self.command.name == "play_next":
+                self.command.reply(success=self.done > 0)
+            else:
+                self.command.reply(actually_burst=self.done)
+
+
 def parse_remaps(values: Collection[str]) -> dict[str, str]:
     """`/from:=/to` pairs (rosbag and ROS remapping syntax); the player resolves the names."""
     remaps = {}
@@ -146,7 +172,10 @@ class Player:
         self._clock_pub: RawPublisher | None = None
         self._next_tick = 0.0
         self._next_ui = 0.0
-        self._step = False
+        self._burst: _Burst | None = None
+        self._seek_to: int | None = None  # bag time to continue from (rosbag2's seek)
+        self._stopping = False  # rosbag2's stop: end playing
+        self.controls: Controls | None = None  # rosbag2's control services (play_ros2)
         self._started = False
         self.total = (reader.end_ns - reader.start_ns) / 1e9 if reader.message_count else 0.0
         self.window = self._window()
@@ -277,21 +306,36 @@ class Player:
     def run(self) -> PlayResult:
         if not self._plans:
             return self.result
-        self._pause_before_start()
-        if self.options.pause:
-            self.clock.pause(time.perf_counter())
-        while True:
-            published = self._play_once()
-            self.result.loops += 1
-            if not self.options.loop or published == 0:
-                break
-        if self.options.keep_alive:
-            while True:
+        try:
+            self._pause_before_start()
+            if self.options.pause:
+                self.clock.pause(time.perf_counter())
+            while not self._stopping:
+                published = self._play_once()
+                self.result.loops += 1
+                if not self.options.loop or published == 0:
+                    break
+            while self.options.keep_alive and not self._stopping:
                 now = time.perf_counter()
                 self._ui(now)
                 self._tick_clock(now)
                 time.sleep(UI_INTERVAL)
+        finally:
+            self.close_controls()
         return self.result
+
+    @property
+    def serves_controls(self) -> bool:
+        """Whether control services (resume, ...) are served: playing can then resume without keys."""
+        return False
+
+    def close_controls(self) -> None:
+        """Answer what the services still ask: playing has ended."""
+        if self._burst is not None:
+            self._burst.reply()
+            self._burst = None
+        if self.controls is not None:
+            self.controls.close()
 
     def _pause_before_start(self) -> None:
         options = self.options
@@ -311,8 +355,8 @@ class Player:
         else:
             self.console.say("Hit space to toggle paused, or 's' to step.")
 
-    def _messages(self) -> Iterator[tuple[_Plan, int, Any]]:
-        start, end = self.window
+    def _messages(self, start: int) -> Iterator[tuple[_Plan, int, Any]]:
+        end = self.window[1]
         plans = self._plans
         conns = [c for c in self.connections if id(c) in plans]
         for conn, stamp, data in self.reader.messages(conns, start, end):
@@ -333,19 +377,34 @@ class Player:
             yield plan, stamp, payload
 
     def _play_once(self) -> int:
+        """One pass over the bag (again from where a seek asks); the messages published."""
+        published = 0
+        start = self.window[0]
+        while True:
+            published += self._play_from(start, published)
+            if self._seek_to is None or self._stopping:
+                break
+            start, self._seek_to = self._seek_to, None
+            self.clock.start(start, time.perf_counter())  # paused or not, as before the seek
+        self.result.published += published
+        return published
+
+    def _play_from(self, start: int, before: int) -> int:
         published = 0
         clock_pub = self._clock_pub
         wait = self._wait
         limit = self.options.max_messages
-        for plan, stamp, payload in self._messages():
-            if limit is not None and self.result.published + published >= limit:
+        for plan, stamp, payload in self._messages(start):
+            if limit is not None and self.result.published + before + published >= limit:
                 break
-            if published == 0:
+            if before + published == 0 and self._seek_to is None:
                 now = time.perf_counter()
                 self.clock.start(stamp, now)
                 self._next_tick = now
                 self._started = True
             wait(stamp, plan.pause)
+            if self._seek_to is not None or self._stopping:
+                break
             if clock_pub is not None:
                 if self.clock_per_message or plan.clock:
                     clock_pub.publish_raw(self._clock_message(stamp))
@@ -353,13 +412,24 @@ class Player:
                     self._tick_clock(time.perf_counter())  # behind schedule, _wait returns before ticking
             plan.publisher.publish_raw(payload)
             published += 1
-        self.result.published += published
+            burst = self._burst
+            if burst is not None and burst.sent():
+                burst.reply()
+                self._burst = None
         return published
 
     def _wait(self, stamp: int, pause_topic: bool = False) -> None:
-        if self.options.immediate and not self.clock.paused:
-            return
         clock = self.clock
+        if self._burst is not None:
+            clock.start(stamp, time.perf_counter())  # stay paused, at this message's time
+            return
+        if self.options.immediate and not clock.paused:
+            now = time.perf_counter()
+            if now < self._next_ui:
+                return
+            self._ui(now)  # keys and services between messages too
+            if not clock.paused or self._seek_to is not None or self._stopping:
+                return
         clock_pub = self._clock_pub
         now = time.perf_counter()
         if self._skip_ns is not None and stamp - clock.bag_time(now) > self._skip_ns:
@@ -371,9 +441,10 @@ class Player:
             now = time.perf_counter()
             if now >= self._next_ui:
                 self._ui(now)
-                if self._step:
-                    self._step = False
+                if self._burst is not None:
                     clock.start(stamp, now)  # stay paused, at this message's time
+                    return
+                if self._seek_to is not None or self._stopping:
                     return
             due = clock.due(stamp)
             if now >= due:
@@ -404,16 +475,54 @@ class Player:
                     self.clock.resume(now)
                 else:
                     self.clock.pause(now)
-            elif key in ("s", "RIGHT") and self.clock.paused:
-                self._step = True
+            elif key in ("s", "RIGHT") and self.clock.paused and self._burst is None:
+                self._burst = _Burst(1)
             elif key == "t":
                 self._pause_for_topics = not self._pause_for_topics
             elif key in ("UP", "DOWN"):  # rosbag2's 10 % a press
                 self.clock.set_rate(self.clock.rate * (1.1 if key == "UP" else 0.9), now)
                 if console.form == "ros2 bag":
                     console.say(f"[INFO] [rosbag2_player]: Set rate to {self.clock.rate:g}")
+        if self.controls is not None:
+            for command in self.controls.pending():
+                self._command(command, now)
         if console.show_status:
             bag_ns = self.clock.bag_time(now) if self._started else self.window[0]
             state = "PAUSED " if self.clock.paused else "RUNNING"
             elapsed = (bag_ns - self.reader.start_ns) / 1e9
             console.status(state, bag_ns / 1e9, elapsed, self.total, self.clock.rate)
+
+    def _command(self, command: Command, now: float) -> None:
+        """A request of rosbag2's control services (player_services.py), done as the keys do it."""
+        clock, name, value = self.clock, command.name, command.value
+        if name in ("pause", "resume", "toggle_paused"):
+            if name == "pause" or (name == "toggle_paused" and not clock.paused):
+                clock.pause(now)
+            else:
+                clock.resume(now)
+            command.reply()
+        elif name == "is_paused":
+            command.reply(paused=clock.paused)
+        elif name == "get_rate":
+            command.reply(rate=clock.rate)
+        elif name == "set_rate":
+            if value > 0:
+                clock.set_rate(value, now)
+            command.reply(success=value > 0)
+        elif name in ("play_next", "burst"):
+            if not clock.paused or self._burst is not None:  # rosbag2: only while paused
+                self.warn(f"{name} is done only while paused")
+                command.reply(**({"success": False} if name == "play_next" else {"actually_burst": 0}))
+            else:
+                self._burst = _Burst(1 if name == "play_next" else value or None, command)
+        elif name == "seek":
+            start, end = self.window
+            last = self.reader.end_ns if end is None else end
+            if value > last:
+                command.reply(success=False)
+            else:
+                self._seek_to = max(value, start)
+                command.reply(success=True)
+        elif name == "stop":
+            self._stopping = True
+            command.reply()

@@ -12,6 +12,8 @@ gets a DDS writer, transient_local where the recording publisher latched (ROS 1)
 - --clock publishes rosgraph_msgs/msg/Clock on /clock at --hz, as `ros2 bag play --clock HZ` does: the
   playback clock's time, not each message's stamp. The writer is reliable, which best-effort readers
   (rclcpp's ClockQoS) match too.
+- rosbag2's control services (`/rosbag2_player/pause`, `set_rate`, `seek`, ...: player_services.py) are
+  served while playing; they act as the keys do.
 """
 
 from __future__ import annotations
@@ -25,6 +27,7 @@ from rosbags.interfaces import Connection, ConnectionExtRosbag1, ConnectionExtRo
 from rostool.bag.crossver import CrossVersionStores
 from rostool.bag.failures import describe
 from rostool.bag.play import Player, RawPublisher, _Kind
+from rostool.bag.player_services import Controls, Served, serve_player
 from rostool.errors import RostoolError
 
 if TYPE_CHECKING:
@@ -47,10 +50,24 @@ class Ros2Player(Player):
         """The bag's ROS 1 types as ROS 2 types, made as they are first played."""
         return CrossVersionStores(dst_version=2)
 
+    served: Served | None = None  # rosbag2's control services, once advertised
+
     def advertise(self) -> None:
         if self.reader.ros_version == 2:
             self.types.register(self.reader.resolver.store.fielddefs)  # only what the distro lacks
         super().advertise()
+        if self._plans:
+            self.controls = Controls()
+            self.served = serve_player(self.graph, self.controls, self.warn)
+
+    @property
+    def serves_controls(self) -> bool:
+        return bool(self.served)
+
+    def close_controls(self) -> None:
+        super().close_controls()
+        if self.served is not None:
+            self.served.close()
 
     def _kind_of(self, conn: Connection) -> _Kind:
         """One DDS writer per topic; ROS 1 messages are converted, the first one checked."""

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Literal, Protocol, TypedDict
 
@@ -183,6 +183,12 @@ class RawPublisher(Publisher, Protocol):
     def publish_raw(self, payload: bytes) -> None: ...
 
 
+class ServedService(Protocol):
+    """A service this process serves (`Graph.serve_service`) until closed."""
+
+    def close(self) -> None: ...
+
+
 class ParameterDescriptor(TypedDict):
     """`Parameters.descriptor`'s facts (ros2 param describe)."""
 
@@ -263,6 +269,10 @@ class Graph(Protocol):
     def service_args(self, name: str) -> str: ...
     def service_info(self, name: str) -> ServiceInfo | None: ...  # what the style's info prints
     def find_services(self, type_name: str) -> list[str]: ...
+    # serve NAME of `pkg/srv/Type` from this process's node: handler(request) -> the response's fields
+    def serve_service(
+        self, name: str, srv_type: str, handler: Callable[[Any], Mapping[str, Any]]
+    ) -> ServedService: ...
     # call with the command-line values (in the style's forms): (request, response)
     def service_call(
         self, name: str, values: tuple[str, ...], wait: bool, timeout: float | None

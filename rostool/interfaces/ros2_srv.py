@@ -7,6 +7,7 @@ from __future__ import annotations
 from rostool.errors import RostoolError
 from rostool.interfaces.definitions import service_types
 from rostool.interfaces.ros2_types import Ros2Types
+from rostool.interfaces.rosbag2_srv import ROSBAG2_SERVICES
 
 # services rosbags' type stores lack (they hold the messages): their .srv text
 SRV_DEFINITIONS: dict[str, str] = {
@@ -34,6 +35,7 @@ SRV_DEFINITIONS: dict[str, str] = {
     "type_description_interfaces/srv/GetTypeDescription": "string type_name\nstring type_hash\n"
     "bool include_type_sources true\n---\nbool successful\nstring failure_reason\n"
     "TypeDescription type_description\nTypeSource[] type_sources\nKeyValue[] extra_information\n",
+    **ROSBAG2_SERVICES,  # the player's and recorder's services (bag play, bag record --snapshot-mode)
 }
 
 

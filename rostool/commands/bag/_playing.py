@@ -57,11 +57,11 @@ def run_play(ctx: click.Context, request: PlayRequest) -> PlayResult:
             player: Player = Ros2Player(reader, graph, options, console, warn)
         else:
             player = Player(reader, graph, options, console, warn)
-        for flag, used in request.pause_flags:
-            if used and not console.keyboard:  # the player would stay paused forever
-                raise RostoolError(f"{flag} needs a terminal on stdin to resume with space")
         with console:
             player.advertise()
+            for flag, used in request.pause_flags:
+                if used and not console.keyboard and not player.serves_controls:  # paused forever
+                    raise RostoolError(f"{flag} needs a terminal on stdin to resume with space")
             result = player.run()
             if not ros2_form:
                 console.say("Done.")

@@ -25,7 +25,7 @@ from rostool.interfaces.names import hidden_name
 if TYPE_CHECKING:
     from rostool.graph.base import GoalOutcome, GoalWatcher, OnError, OnMessage, Subscription
     from rostool.graph.rclpy.context import RclpyContext
-    from rostool.graph.rclpy.services import RclpyServiceClient
+    from rostool.graph.rclpy.services import RclpyServiceClient, RclpyServiceServer
     from rostool.graph.ros2_base.qos import QosProfile
     from rostool.graph.ros2_base.transport import ServiceEndpoint, Writer
     from rostool.interfaces.ros2_types import Ros2Types
@@ -330,6 +330,13 @@ class RclpyGraph(Ros2Base):
         from rostool.graph.rclpy.services import RclpyServiceClient
 
         return RclpyServiceClient(self, service, srv_type)
+
+    def _service_server(
+        self, service: str, srv_type: str, answer: Callable[[Any], Any]
+    ) -> RclpyServiceServer:
+        from rostool.graph.rclpy.services import RclpyServiceServer
+
+        return RclpyServiceServer(self, service, srv_type, answer)
 
     def send_goal(
         self, name: str, kind: str | None, goal: Any, timeout: float | None, watcher: GoalWatcher

@@ -98,6 +98,30 @@ class RclpyServiceClient(ReplyWait):
             return
 
 
+class RclpyServiceServer:
+    """Serves one service through an rclpy service: `answer(request) -> response`, rosbags messages both,
+    called on the executor's thread. The class rclpy imports must exist (else one line naming the package)."""
+
+    def __init__(self, graph: RclpyHost, service: str, srv_type: str, answer: Any) -> None:
+        self._graph = graph
+        self.service = resolve(service)
+        self.srv_type, self.request_type, self.response_type = service_store_names(graph, srv_type)
+        self._cls = rtypes.python_class(self.srv_type)
+        self._answer = answer
+        self._server = graph.node.create_service(self._cls, self.service, self._serve)
+
+    def _serve(self, request: Any, _response: Any) -> Any:
+        types = self._graph.types
+        reply = self._answer(rtypes.from_rclpy(types, request, self.request_type))
+        return rtypes.to_rclpy(types, reply, self.response_type, self._cls.Response)
+
+    def close(self) -> None:
+        try:
+            self._graph.node.destroy_service(self._server)
+        except Exception:  # the context is already shut down: rclpy destroyed it
+            return
+
+
 def service_endpoints(graph: RclpyHost) -> list[tuple[str, str, list[str], list[str]]]:
     """(name, type, server nodes, client nodes) of every service that has a server, node by node."""
     graph.settle(require_peers=True)

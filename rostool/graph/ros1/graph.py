@@ -97,6 +97,9 @@ class Ros1Graph(Ros1Core):
     ) -> tuple[Any, Any]:
         return services.call(self.master, self.catalog(), name, values, wait=wait, timeout=timeout)
 
+    def serve_service(self, name: str, srv_type: str, handler: Callable[[Any], Any]) -> Any:
+        raise RostoolError(f"serving {name} ({srv_type}) is done on ROS 2 graphs only")
+
     # --- actions ------------------------------------------------------------------------------
     def actions(self) -> list[ActionSummary]:
         return actions.list_actions(self)

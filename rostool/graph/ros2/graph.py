@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import threading
 import time
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from typing import TYPE_CHECKING, Any
 
 from rostool.errors import RostoolError
@@ -32,7 +32,7 @@ from rostool.interfaces.ros2_types import distro_from_env
 
 if TYPE_CHECKING:
     from rostool.graph.base import GoalOutcome, GoalWatcher, OnError, OnMessage, Subscription
-    from rostool.graph.ros2.services import ServiceClient
+    from rostool.graph.ros2.services import ServiceClient, ServiceServer
     from rostool.graph.ros2.type_description import TypeDescriptionServer
     from rostool.graph.ros2_base.qos import QosProfile
     from rostool.graph.ros2_base.transport import Writer
@@ -287,6 +287,11 @@ class Ros2Graph(Ros2Base):
         from rostool.graph.ros2.services import ServiceClient
 
         return ServiceClient(self.session, resolve(service), srv_type)
+
+    def _service_server(self, service: str, srv_type: str, answer: Callable[[Any], Any]) -> ServiceServer:
+        from rostool.graph.ros2.services import ServiceServer
+
+        return ServiceServer(self.session, service, srv_type, answer)
 
     def call_service(self, service: str, srv_type: str, request: Any, timeout: float = 5.0) -> Any:
         """Call a service (rmw_cyclonedds_cpp's request/reply convention) with a request mapping."""

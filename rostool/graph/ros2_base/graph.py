@@ -8,7 +8,7 @@ from __future__ import annotations
 import os
 import sys
 import threading
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import TYPE_CHECKING, Any, Literal
 
 from rostool.errors import RostoolError
@@ -32,7 +32,7 @@ from rostool.graph.ros2_base.recording import Ros2Source
 from rostool.interfaces.names import hidden_name
 
 if TYPE_CHECKING:
-    from rostool.graph.base import CancelingGoal, GoalOutcome, GoalWatcher, ServiceInfo
+    from rostool.graph.base import CancelingGoal, GoalOutcome, GoalWatcher, ServedService, ServiceInfo
     from rostool.graph.qos import QosRequest as UserQos
     from rostool.graph.recording import Encoding
     from rostool.graph.ros2_base.transport import EndpointView, ServiceClient, ServiceEndpoint, Writer
@@ -116,6 +116,11 @@ class Ros2Base:
         raise NotImplementedError
 
     def _subscription(self, topic: str, on_message: OnMessage, on_error: OnError) -> Subscription:
+        raise NotImplementedError
+
+    def _service_server(self, service: str, srv_type: str, answer: Callable[[Any], Any]) -> ServedService:
+        """Serve `service` from this process's node: `answer(request message) -> response message`, called
+        on a thread of the transport; raises RostoolError when the transport cannot serve the type."""
         raise NotImplementedError
 
     def store_name(self, type_name: str) -> str:
@@ -309,6 +314,28 @@ class Ros2Base:
         self, name: str, values: tuple[str, ...], wait: bool = False, timeout: float | None = None
     ) -> tuple[Any, Any]:
         return call_service(self, name, values, wait, timeout)
+
+    def serve_service(
+        self, name: str, srv_type: str, handler: Callable[[Any], Mapping[str, Any]]
+    ) -> ServedService:
+        """Serve `name` (`pkg/srv/Type`: the store's, a built-in or a source definition) from this process's
+        node until closed; `handler(request)` returns the response's fields (the rest keep their defaults)."""
+        from rostool.interfaces.fill import build_message
+        from rostool.interfaces.ros2_srv import register_service
+
+        _request_type, response_type = register_service(self.types, srv_type)
+        types = self.types
+
+        def answer(request: Any) -> Any:
+            try:
+                fields = dict(handler(request))
+            except Exception as err:  # a failing handler must not stop the serving thread
+                self.warn(f"{name}: cannot answer: {err}")
+                fields = {}
+            return build_message(types.store, response_type, types.with_defaults(response_type, fields))
+
+        self._start()
+        return self._service_server(resolve(name), srv_type, answer)
 
     def service_uri(self, name: str) -> str:
         raise ros1_only("service uri")

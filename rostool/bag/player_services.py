@@ -1,0 +1,141 @@
+"""rosbag2's control services: `bag play` on a ROS 2 graph serves the player's (`/rosbag2_player/pause`,
+`resume`, `toggle_paused`, `is_paused`, `get_rate`, `set_rate`, `play_next`, `burst`, `seek`, `stop`) and
+`bag record --snapshot-mode` the recorder's `/rosbag2_recorder/snapshot`, with rosbag2_interfaces' types
+(built into rostool: interfaces/rosbag2_srv.py).
+
+A request arrives on a thread of the transport; `Controls` hands it to the player's loop, which acts on
+it as on a key (play.py `Player._command`) and answers. A service that cannot be served (the rclpy
+backend where rosbag2_interfaces is not installed) leaves playing and recording as they are, with one
+warning.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import queue
+import threading
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+from rostool.errors import RostoolError
+from rostool.graph.base import Graph, ServedService
+
+PLAYER_NODE = "/rosbag2_player"  # rosbag2's node names: its services are under them
+RECORDER_NODE = "/rosbag2_recorder"
+_TYPES = "rosbag2_interfaces/srv/"
+
+
+def _no_value(_request: Any) -> None:
+    return None
+
+
+def _time_ns(request: Any) -> int:
+    return int(request.time.sec) * 1_000_000_000 + int(request.time.nanosec)
+
+
+# service -> (type, the request's value for the player)
+PLAYER_SERVICES: dict[str, tuple[str, Callable[[Any], Any]]] = {
+    "pause": ("Pause", _no_value),
+    "resume": ("Resume", _no_value),
+    "toggle_paused": ("TogglePaused", _no_value),
+    "is_paused": ("IsPaused", _no_value),
+    "get_rate": ("GetRate", _no_value),
+    "set_rate": ("SetRate", lambda request: float(request.rate)),
+    "play_next": ("PlayNext", _no_value),
+    "burst": ("Burst", lambda request: int(request.num_messages)),
+    "seek": ("Seek", _time_ns),
+    "stop": ("Stop", _no_value),
+}
+
+
+@dataclass
+class Command:
+    """One service request for the player's loop: `name` (the service's) and the request's value."""
+
+    name: str
+    value: Any = None
+    answer: dict[str, Any] = field(default_factory=dict)
+    done: threading.Event = field(default_factory=threading.Event)
+
+    def reply(self, **fields: Any) -> None:
+        self.answer = fields
+        self.done.set()
+
+
+class Controls:
+    """Requests from the services' threads, taken and answered by the player's loop (`pending`); once
+    closed, what is left is answered with the response's defaults."""
+
+    def __init__(self) -> None:
+        self._queue: queue.SimpleQueue[Command] = queue.SimpleQueue()
+        self._closed = threading.Event()
+
+    def ask(self, name: str, value: Any = None) -> dict[str, Any]:
+        command = Command(name, value)
+        if self._closed.is_set():
+            return {}
+        self._queue.put(command)
+        while not command.done.wait(0.1):
+            if self._closed.is_set():
+                break
+        return command.answer
+
+    def pending(self) -> list[Command]:
+        found = []
+        with contextlib.suppress(queue.Empty):
+            while True:
+                found.append(self._queue.get_nowait())
+        return found
+
+    def close(self) -> None:
+        self._closed.set()
+        for command in self.pending():
+            command.reply()
+
+
+class Served:
+    """The services one player or recorder serves; `close()` ends them."""
+
+    def __init__(self, services: Sequence[ServedService] = ()) -> None:
+        self.services = list(services)
+
+    def __bool__(self) -> bool:
+        return bool(self.services)
+
+    def close(self) -> None:
+        for service in self.services:
+            with contextlib.suppress(Exception):
+                service.close()
+        self.services.clear()
+
+
+def serve(
+    graph: Graph,
+    node: str,
+    handlers: Mapping[str, tuple[str, Callable[[Any], Mapping[str, Any]]]],
+    warn: Callable[[str], None],
+) -> Served:
+    """Serve `node`/NAME for each NAME -> (type in rosbag2_interfaces, handler); none when one fails (one
+    warning saying why)."""
+    served = Served()
+    try:
+        for name, (type_name, handler) in handlers.items():
+            served.services.append(graph.serve_service(f"{node}/{name}", _TYPES + type_name, handler))
+    except RostoolError as err:
+        served.close()
+        warn(f"{node}'s services are not served: {err}")
+    return served
+
+
+def serve_player(graph: Graph, controls: Controls, warn: Callable[[str], None]) -> Served:
+    def handler(name: str, value_of: Callable[[Any], Any]) -> Callable[[Any], Mapping[str, Any]]:
+        return lambda request: controls.ask(name, value_of(request))
+
+    handlers = {name: (kind, handler(name, value_of)) for name, (kind, value_of) in PLAYER_SERVICES.items()}
+    return serve(graph, PLAYER_NODE, handlers, warn)
+
+
+def serve_snapshot(graph: Graph, take: Callable[[], bool], warn: Callable[[str], None]) -> Served:
+    """`/rosbag2_recorder/snapshot`: `take()` writes the snapshot and says whether it was written."""
+    return serve(graph, RECORDER_NODE, {"snapshot": ("Snapshot", lambda _request: {"success": take()})}, warn)

@@ -1,0 +1,164 @@
+"""Issue 25: rosbag2's control services. `bag play` on a ROS 2 graph serves /rosbag2_player's pause,
+resume, toggle_paused, is_paused, get_rate, set_rate, play_next, burst, seek and stop (rosbag2_interfaces'
+types, built into rostool); each is called here with `rostool --ros2 service call` and its effect observed
+by a real rclpy subscriber. The rclpy backend serves them where rosbag2_interfaces imports, else it plays
+without them after one warning; its service server is checked with the real `ros2 service call`."""
+
+from __future__ import annotations
+
+import re
+import subprocess
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+
+from tests.ros2_peers import PEERS_DIR, RclpyPeer, peer_env, peer_python, rostool_rclpy_popen
+from tests.support import Watched, rostool, rostool_popen
+
+Start = Callable[..., RclpyPeer]
+PERIOD_NS = 100_000_000
+START_NS = 1_700_000_000 * 1_000_000_000
+PAUSED = "[INFO] [rosbag2_player]"  # nothing else is printed while paused without a terminal
+
+
+def write_strings_bag(path: Path, count: int) -> None:
+    """An .mcap bag of std_msgs/String 'n N' on /chatter, one every 0.1 s."""
+    from rosbags.rosbag2 import StoragePlugin, Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    store = get_typestore(Stores.ROS2_JAZZY)
+    string = store.types["std_msgs/msg/String"]
+    with Writer(path, version=9, storage_plugin=StoragePlugin.MCAP) as writer:
+        conn = writer.add_connection("/chatter", "std_msgs/msg/String", typestore=store)
+        for n in range(count):
+            data = store.serialize_cdr(string(data=f"n {n}"), "std_msgs/msg/String")
+            writer.write(conn, START_NS + n * PERIOD_NS, data)
+
+
+def call(env: dict[str, str], service: str, kind: str, request: str = "{}") -> str:
+    """`rostool --ros2 service call`: the response line (`...Response(field=value)`)."""
+    done = rostool(["--ros2", "service", "call", f"/rosbag2_player/{service}",
+                    f"rosbag2_interfaces/srv/{kind}", request], env, timeout=60)  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    assert "response:" in done.stdout, done.stdout
+    return done.stdout.split("response:", 1)[1].strip()
+
+
+def heard(peer: RclpyPeer) -> list[int]:
+    return [int(e["data"].split()[1]) for e in peer.of("heard")]
+
+
+@pytest.mark.parametrize("distro", ["jazzy"], indirect=True)
+def test_player_services_pause_step_burst_rate_seek_and_resume(
+    graph_env: dict[str, str], start_peer: Start, tmp_path: Path
+) -> None:
+    bag = tmp_path / "strings"
+    write_strings_bag(bag, 60)
+    listener = start_peer("--name", "listener", "--listen", "/chatter")
+    play = Watched(rostool_popen(["--ros2", "bag", "play", str(bag), "-p", "--wait-for-subscribers"],
+                                 graph_env, stdin=subprocess.DEVNULL))  # fmt: skip
+    try:
+        assert call(graph_env, "is_paused", "IsPaused").endswith("(paused=True)")
+        assert call(graph_env, "play_next", "PlayNext").endswith("(success=True)")
+        assert listener.wait_for("heard", lambda e: e["data"] == "n 0", timeout=20)
+        assert call(graph_env, "burst", "Burst", "{num_messages: 3}").endswith("(actually_burst=3)")
+        assert listener.wait_for("heard", lambda e: e["data"] == "n 3", timeout=20)
+        assert call(graph_env, "set_rate", "SetRate", "{rate: 2.5}").endswith("(success=True)")
+        assert call(graph_env, "set_rate", "SetRate", "{rate: -1.0}").endswith("(success=False)")
+        assert call(graph_env, "get_rate", "GetRate").endswith("(rate=2.5)")
+        past_end = f"{{time: {{sec: {START_NS // 10**9 + 60}, nanosec: 0}}}}"
+        assert call(graph_env, "seek", "Seek", past_end).endswith("(success=False)")
+        to_20 = f"{{time: {{sec: {START_NS // 10**9 + 2}, nanosec: 0}}}}"
+        assert call(graph_env, "seek", "Seek", to_20).endswith("(success=True)")
+        assert call(graph_env, "play_next", "PlayNext").endswith("(success=True)")
+        assert listener.wait_for("heard", lambda e: e["data"] == "n 20", timeout=20)
+        assert heard(listener) == [0, 1, 2, 3, 20]  # still paused: nothing more was published
+        call(graph_env, "toggle_paused", "TogglePaused")
+        assert listener.wait_for("heard", lambda e: e["data"] == "n 59", timeout=30)
+        assert play.proc.wait(timeout=30) == 0
+    finally:
+        _out, err = play.stop()
+    assert heard(listener) == [0, 1, 2, 3, *range(20, 60)], err
+    assert "services are not served" not in err
+
+
+@pytest.mark.parametrize("distro", ["jazzy"], indirect=True)
+def test_player_services_pause_resume_and_stop(
+    graph_env: dict[str, str], start_peer: Start, tmp_path: Path
+) -> None:
+    bag = tmp_path / "strings"
+    write_strings_bag(bag, 600)  # a minute: stopped long before its end
+    listener = start_peer("--name", "listener", "--listen", "/chatter")
+    play = Watched(rostool_popen(["--ros2", "bag", "play", str(bag), "--wait-for-subscribers"], graph_env,
+                                 stdin=subprocess.DEVNULL))  # fmt: skip
+    try:
+        assert listener.wait_for("heard", lambda e: e["data"] == "n 2", timeout=30)
+        call(graph_env, "pause", "Pause")
+        assert call(graph_env, "is_paused", "IsPaused").endswith("(paused=True)")
+        before = heard(listener)
+        assert call(graph_env, "play_next", "PlayNext").endswith("(success=True)")
+        assert listener.wait_for("heard", lambda e: len(heard(listener)) > len(before), timeout=20)
+        assert heard(listener) == list(range(len(before) + 1))  # exactly the next one
+        call(graph_env, "resume", "Resume")
+        assert call(graph_env, "is_paused", "IsPaused").endswith("(paused=False)")
+        assert call(graph_env, "burst", "Burst", "{num_messages: 2}").endswith("(actually_burst=0)")
+        call(graph_env, "stop", "Stop")
+        assert play.proc.wait(timeout=30) == 0
+    finally:
+        _out, err = play.stop()
+    played = heard(listener)
+    assert played == list(range(len(played))) and len(played) < 600, played
+    assert "burst is done only while paused" in err
+
+
+def test_rclpy_backend_plays_without_the_services_it_cannot_type(
+    distro: str, graph_env: dict[str, str], start_peer: Start, tmp_path: Path
+) -> None:
+    """rosbag2_interfaces is not in the peer venvs: one warning, then the bag plays as before."""
+    bag = tmp_path / "strings"
+    write_strings_bag(bag, 5)
+    listener = start_peer("--name", "listener", "--listen", "/chatter")
+    play = rostool_rclpy_popen(["--ros2", "bag", "play", str(bag), "--wait-for-subscribers"], graph_env,
+                               tmp_path, distro)  # fmt: skip
+    _out, err = play.communicate(timeout=90)
+    assert play.returncode == 0, err
+    assert listener.wait_for("heard", lambda e: e["data"] == "n 4", timeout=20)
+    assert heard(listener) == [0, 1, 2, 3, 4]
+    warnings = [line for line in err.splitlines() if "services are not served" in line]
+    assert len(warnings) == 1, err
+    assert "/rosbag2_player" in warnings[0] and "rosbag2_interfaces" in warnings[0]
+
+
+SERVE_SETBOOL = """
+import sys, time
+from rostool.graph.rclpy.graph import RclpyGraph
+graph = RclpyGraph("served")
+served = graph.serve_service("/flip", "std_srvs/srv/SetBool",
+                             lambda request: {"success": not request.data, "message": f"got {request.data}"})
+print("serving", flush=True)
+sys.stdin.read()
+served.close()
+graph.close()
+"""
+
+
+def test_rclpy_backend_serves_a_service_the_real_ros2_calls(
+    distro: str, graph_env: dict[str, str], tmp_path: Path
+) -> None:
+    """`serve_service` on the rclpy backend (std_srvs imports there), answered to the real ros2 CLI."""
+    env = peer_env(graph_env, tmp_path)
+    server = Watched(subprocess.Popen([str(peer_python(distro)), "-c", SERVE_SETBOOL], env=env,
+                                      stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                      text=True))  # fmt: skip
+    try:
+        assert server.wait_for(lambda out: "serving" in out, 60), server.stop()
+        ros2 = PEERS_DIR / "jazzy" / "bin" / "ros2"  # the real ros2 (the kilted venv has rclpy only)
+        done = subprocess.run([str(ros2), "service", "call", "/flip", "std_srvs/srv/SetBool", "{data: true}"],
+                              env=env, capture_output=True, text=True, timeout=60)  # fmt: skip
+    finally:
+        assert server.proc.stdin is not None
+        server.proc.stdin.close()
+        server.proc.wait(timeout=30)
+    assert done.returncode == 0, done.stderr
+    assert re.search(r"SetBool_Response\(success=False, message='got True'\)", done.stdout), done.stdout
