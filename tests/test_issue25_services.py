@@ -162,3 +162,40 @@ def test_rclpy_backend_serves_a_service_the_real_ros2_calls(
         server.proc.wait(timeout=30)
     assert done.returncode == 0, done.stderr
     assert re.search(r"SetBool_Response\(success=False, message='got True'\)", done.stdout), done.stdout
+
+
+@pytest.mark.parametrize("distro", ["jazzy"], indirect=True)
+def test_recorder_snapshot_service_writes_the_held_second(
+    graph_env: dict[str, str], start_peer: Start, tmp_path: Path
+) -> None:
+    """`bag record --snapshot-mode` serves /rosbag2_recorder/snapshot: the call answers once the messages
+    held (the last second) are written; what comes after it is never written."""
+    from rosbags.highlevel import AnyReader
+
+    talker = start_peer("--name", "talker", "--talk", "/chatter", "--rate", "20")
+    bag = tmp_path / "snap"
+    args = ["--ros2", "bag", "record", "/chatter", "-o", str(bag), "--snapshot-mode",
+            "--max-cache-duration", "1"]  # fmt: skip
+    recorder = Watched(rostool_popen(args, graph_env, stdin=subprocess.DEVNULL))
+    try:
+        matched = int(talker.wait_for("matched", lambda e: e["subscribers"] >= 1, timeout=30)["count"])
+        talker.wait_for("published", lambda e: e["count"] > matched + 40, timeout=30)
+        done = rostool(["--ros2", "service", "call", "/rosbag2_recorder/snapshot",
+                        "rosbag2_interfaces/srv/Snapshot"], graph_env, timeout=60)  # fmt: skip
+        assert done.returncode == 0, done.stderr
+        assert done.stdout.rstrip().endswith("Snapshot_Response(success=True)"), done.stdout
+        answered = talker.of("published")[-1]["count"]  # reported once a second: up to 20 behind
+        later = int(talker.wait_for("published", lambda e: e["count"] > answered + 40, timeout=30)["count"])
+    finally:
+        _out, err = recorder.stop()
+    assert "Taking a snapshot." in err, err
+    with AnyReader([bag]) as reader:
+        rows = [
+            (stamp, int(reader.deserialize(data, conn.msgtype).data.removeprefix("hello ")))
+            for conn, stamp, data in reader.messages()
+        ]
+    numbers = [n for _t, n in rows]
+    assert numbers == list(range(numbers[0], numbers[0] + len(numbers))), numbers  # one run, no gap
+    assert rows[-1][0] - rows[0][0] <= 1_000_000_000, rows  # the last second only
+    # held before the call: nothing of the second (and more) published after it
+    assert numbers[0] > matched and numbers[-1] < later - 15, (matched, later, numbers)

@@ -142,6 +142,7 @@ class Recorder:
             _Ring(options.buffer_bytes, round(options.snapshot_seconds * 1e9)) if options.snapshot else None
         )
         self._snapshot_asked = threading.Event()
+        self._snapshot_waiters: list[threading.Event] = []  # set once the snapshot asked for is written
         self.snapshots: list[int] = []  # messages written by each snapshot
         self.result = RecordResult()
         self._subscribed: set[str] = set()
@@ -269,12 +270,15 @@ class Recorder:
                         self._write_one(*item)
                 if ring is not None and self._snapshot_asked.is_set():
                     self._snapshot_asked.clear()
+                    waiters, self._snapshot_waiters = self._snapshot_waiters, []
                     taken = ring.take()
                     for item in taken:
                         self._write_one(*item)
                     self.snapshots.append(len(taken))
                     if self._sink is not None:
                         self._sink.flush()
+                    for done in waiters:
+                        done.set()
                 now = time.monotonic()
                 if self._sink is not None and (not batch or now - last_flush >= FLUSH_INTERVAL):
                     self._sink.flush()
@@ -333,10 +337,14 @@ class Recorder:
             self._stop.set()
 
     # -- main ------------------------------------------------------------------------------------
-    def take_snapshot(self) -> None:
-        """Snapshot mode: write what the buffer holds now (done by the writer thread)."""
+    def take_snapshot(self) -> threading.Event:
+        """Snapshot mode: write what the buffer holds now (done by the writer thread); the event is set
+        once it is written."""
+        done = threading.Event()
+        self._snapshot_waiters.append(done)
         self._snapshot_asked.set()
         self.queue.ready.set()
+        return done
 
     @property
     def paused(self) -> bool:

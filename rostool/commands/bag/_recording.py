@@ -3,6 +3,7 @@ parse into a `RecordRequest`; `run_record` records it from the live graph and re
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import os
 import sys
@@ -17,6 +18,8 @@ from rostool.bag.record_options import RecordOptions, RecordResult
 from rostool.bag.record_select import TopicSelector
 from rostool.errors import RostoolError
 from rostool.graph.qos import QosRequest
+
+SNAPSHOT_WAIT = 10.0  # seconds the snapshot service waits for the snapshot to be written
 
 
 @dataclass(frozen=True)
@@ -36,6 +39,7 @@ class RecordRequest:
 
 
 def run_record(ctx: click.Context, request: RecordRequest) -> None:
+    from rostool.bag.player_services import Served, serve_snapshot
     from rostool.bag.record import Recorder, stop_on_signals
     from rostool.commands._common import live_graph
     from rostool.commands.bag._record_console import PlainProgress, RecordDashboard, pause_controls
@@ -78,16 +82,24 @@ def run_record(ctx: click.Context, request: RecordRequest) -> None:
                 click.echo(f"[INFO] [rosbag2_recorder]: {word} recording." if ros2_form else
                            f"rostool: {word.lower()} recording", err=True)  # fmt: skip
 
-        def snapshot() -> None:
-            recorder.take_snapshot()
+        def snapshot() -> threading.Event:
+            done = recorder.take_snapshot()
             if progress is not None:
                 progress.end()
             if not request.quiet:
                 click.echo("[INFO] [rosbag2_recorder]: Taking a snapshot." if ros2_form else
                            "rostool: writing a snapshot", err=True)  # fmt: skip
+            return done
 
         take = snapshot if options.snapshot else None
-        with stop_on_signals(stop), pause_controls(toggle, request.keyboard, take) as keys:
+        served = Served()
+        if take is not None and graph.encoding == "cdr":  # rosbag2's ~/snapshot service too
+            served = serve_snapshot(graph, lambda: snapshot().wait(SNAPSHOT_WAIT), warn)
+        with (
+            contextlib.closing(served),
+            stop_on_signals(stop),
+            pause_controls(toggle, request.keyboard, take) as keys,
+        ):
             if not request.quiet and (keys or recorder.paused):
                 click.echo(_pause_hint(keys, recorder.paused, ros2_form), err=True)
             if not request.quiet and options.snapshot:
