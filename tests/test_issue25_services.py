@@ -199,3 +199,97 @@ def test_recorder_snapshot_service_writes_the_held_second(
     assert rows[-1][0] - rows[0][0] <= 1_000_000_000, rows  # the last second only
     # held before the call: nothing of the second (and more) published after it
     assert numbers[0] > matched and numbers[-1] < later - 15, (matched, later, numbers)
+
+
+# --- ros2 bag record --storage-config-file ---------------------------------------------------------------
+
+
+def record_some(env: dict[str, str], talker: RclpyPeer, args: list[str], messages: int = 40) -> str:
+    """Record /chatter with `args` until `messages` more were published; the recorder's stderr."""
+    recorder = Watched(rostool_popen(["--ros2", "bag", "record", "/chatter", *args], env,
+                                     stdin=subprocess.DEVNULL))  # fmt: skip
+    try:
+        matched = int(talker.wait_for("matched", lambda e: e["subscribers"] >= 1, timeout=30)["count"])
+        talker.wait_for("published", lambda e: e["count"] > matched + messages, timeout=30)
+    finally:
+        _out, err = recorder.stop()
+    assert recorder.proc.returncode == 0, err
+    return err
+
+
+def contiguous_numbers(bag: Path) -> list[int]:
+    from rosbags.highlevel import AnyReader
+
+    with AnyReader([bag]) as reader:
+        numbers = [int(reader.deserialize(data, c.msgtype).data.removeprefix("hello "))
+                   for c, _t, data in reader.messages()]  # fmt: skip
+    assert len(numbers) >= 20 and numbers == list(range(numbers[0], numbers[0] + len(numbers))), numbers
+    return numbers
+
+
+@pytest.mark.parametrize("distro", ["jazzy"], indirect=True)
+def test_storage_config_file_sets_mcap_compression_and_chunk_size(
+    graph_env: dict[str, str], start_peer: Start, tmp_path: Path
+) -> None:
+    from mcap.reader import make_reader
+
+    config = tmp_path / "mcap_writer_options.yaml"
+    config.write_text("compression: Zstd\ncompressionLevel: Fast\nchunkSize: 1024\nnoChunkCRC: false\n")
+    talker = start_peer("--name", "talker", "--talk", "/chatter", "--rate", "50")
+    bag = tmp_path / "configured"
+    record_some(graph_env, talker, ["-o", str(bag), "--storage-config-file", str(config)])
+    contiguous_numbers(bag)
+    with open(bag / "configured_0.mcap", "rb") as stream:  # the mcap library reads the file on its own
+        reader = make_reader(stream)
+        summary = reader.get_summary()
+        assert summary is not None
+        chunks = summary.chunk_indexes
+        assert len(chunks) >= 2 and {c.compression for c in chunks} == {"zstd"}, chunks
+        assert all(1024 <= c.uncompressed_size < 1024 + 512 for c in chunks[:-1]), chunks
+        assert reader.get_header().library == "rostool"
+        assert summary.statistics is not None and summary.statistics.message_count >= 20
+
+
+@pytest.mark.parametrize("distro", ["jazzy"], indirect=True)
+def test_storage_config_file_runs_sqlite3_pragmas(
+    graph_env: dict[str, str], start_peer: Start, tmp_path: Path
+) -> None:
+    import sqlite3
+
+    config = tmp_path / "sqlite3.yaml"
+    pragmas = "['page_size = 8192', 'application_id = 4242', 'journal_mode = MEMORY']"
+    config.write_text(f"write:\n  pragmas: {pragmas}\n")
+    talker = start_peer("--name", "talker", "--talk", "/chatter", "--rate", "50")
+    bag = tmp_path / "pragmas"
+    record_some(graph_env, talker, ["-o", str(bag), "-s", "sqlite3", "--storage-config-file", str(config)])
+    contiguous_numbers(bag)
+    with sqlite3.connect(bag / "pragmas_0.db3") as db:
+        assert db.execute("PRAGMA page_size").fetchone()[0] == 8192  # set before the tables were made
+        assert db.execute("PRAGMA application_id").fetchone()[0] == 4242
+
+
+@pytest.mark.parametrize(
+    ("text", "storage", "said"),
+    [
+        ("chunksize: 1024\n", "mcap", "unknown mcap option chunksize"),
+        ("compression: Brotli\n", "mcap", "compression must be one of None, Lz4, Zstd, not 'Brotli'"),
+        ("chunkSize: -5\n", "mcap", "chunkSize must be a positive number of bytes"),
+        ("noChunking: maybe\n", "mcap", "noChunking must be true or false"),
+        ("write:\n  pragmas: ['x; DROP TABLE messages']\n", "sqlite3", "bad pragma 'x; DROP TABLE messages'"),
+        ("writes: {}\n", "sqlite3", "unknown sqlite3 option writes"),
+    ],
+)
+def test_storage_config_file_refuses_bad_options_in_one_line(
+    text: str, storage: str, said: str, tmp_path: Path
+) -> None:
+    from tests.support import ros2_env
+
+    config = tmp_path / "config.yaml"
+    config.write_text(text)
+    bag = tmp_path / "never"
+    done = rostool(["--ros2", "bag", "record", "/chatter", "-o", str(bag), "-s", storage,
+                    "--storage-config-file", str(config)], ros2_env(), timeout=60)  # fmt: skip
+    assert done.returncode != 0
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and said in lines[0] and str(config) in lines[0], done.stderr
+    assert not bag.exists()

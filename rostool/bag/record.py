@@ -173,7 +173,8 @@ class Recorder:
         if self.fmt == "bag":
             sink: Sink = Ros1Sink(path, self.options.compression, self.options.force, self.source)
         else:
-            sink = Ros2Sink(path, FORMATS[self.fmt], self.source, self.options.force)
+            sink = Ros2Sink(path, FORMATS[self.fmt], self.source, self.options.force,
+                            storage_config=self.options.storage_config)  # fmt: skip
         self._file_start = None
         self._written_in_file = 0
         return sink

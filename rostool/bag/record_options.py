@@ -8,13 +8,16 @@ import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Literal, cast
+from typing import TYPE_CHECKING, Literal, cast
 
 from rostool.bag.formats import FORMATS, by_suffix
 from rostool.bag.record_sinks import active_name
 from rostool.bag.replace import check_replaceable
 from rostool.bag.rosbag2_dir import Rosbag2Layout
 from rostool.errors import RostoolError
+
+if TYPE_CHECKING:
+    from rostool.bag.storage_config import StorageConfig
 
 Format = Literal["bag", "mcap", "db3"]  # the formats of a file: the kinds of formats.FILES
 
@@ -48,6 +51,7 @@ class RecordOptions:
     # of them when > 0) and write them only when a snapshot is asked for (SIGUSR2, key 's')
     snapshot: bool = False
     snapshot_seconds: float = 0.0
+    storage_config: StorageConfig | None = None  # --storage-config-file, for .mcap and .db3 files
 
 
 @dataclass

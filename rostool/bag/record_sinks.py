@@ -13,7 +13,7 @@ import time
 from collections.abc import Callable, Mapping
 from functools import partial
 from pathlib import Path
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 from rostool.bag.crossver import CrossVersionStores
 from rostool.bag.model import BagFormat
@@ -22,6 +22,9 @@ from rostool.bag.ros1_writer import BagWriter, WriteFailed
 from rostool.bag.rosbag2_metadata import METADATA
 from rostool.errors import RostoolError
 from rostool.graph.recording import RecordSource
+
+if TYPE_CHECKING:
+    from rostool.bag.storage_config import StorageConfig
 
 
 def _volatile(best_effort: bool) -> Any:
@@ -137,6 +140,7 @@ class Ros2Sink:
         source: RecordSource,
         force: bool,
         compression: tuple[str, str] | None = None,
+        storage_config: StorageConfig | None = None,
     ) -> None:
         from rosbags.rosbag2 import StoragePlugin
         from rosbags.rosbag2 import Writer as Writer2
@@ -151,6 +155,9 @@ class Ros2Sink:
         plugin = StoragePlugin[fmt.storage.upper()]
         try:
             self.writer: Any = Writer2(self.active, version=9, storage_plugin=plugin)
+            if storage_config is not None:  # --storage-config-file: the storage's writer with its options
+                plugins = {**Writer2.STORAGE_PLUGINS, plugin: storage_config.writer_factory()}
+                self.writer.STORAGE_PLUGINS = plugins
             if compression is not None:
                 from rosbags.rosbag2.enums import CompressionFormat, CompressionMode
 
@@ -168,6 +175,7 @@ class Ros2Sink:
         self._chunk_started = time.monotonic()
         self.metadata: dict[str, Any] = {}  # the part's rosbag2 metadata, read when closed
         self.compressed = compression is not None
+        self.configured = storage_config is not None
 
     @property
     def size(self) -> int:
@@ -233,7 +241,9 @@ class Ros2Sink:
             return
         if self.compressed:  # the file is written through a compressor: nothing to push early
             return
-        if self.fmt.kind == "mcap":
+        if self.fmt.kind == "mcap" and self.configured:
+            storage.flush()  # chunks as the config file sizes them
+        elif self.fmt.kind == "mcap":
             # Close the pending chunk now and then so a killed recorder leaves a reindexable file.
             if storage.chunk.bio.tell() and time.monotonic() - self._chunk_started >= 1.0:
                 storage.close_chunk()

@@ -25,6 +25,7 @@ from rostool.bag.rosbag2_metadata import write_metadata
 from rostool.errors import RostoolError
 
 if TYPE_CHECKING:
+    from rostool.bag.storage_config import StorageConfig
     from rostool.graph.recording import RecordSource
 
 Storage = Literal["mcap", "sqlite3"]
@@ -40,6 +41,7 @@ class Rosbag2Layout:
     compression_mode: str = "none"  # none | file | message
     compression_format: str = ""  # zstd
     custom_data: dict[str, str] = field(default_factory=dict)
+    storage_config: StorageConfig | None = None  # --storage-config-file
 
 
 def check_output(path: Path) -> None:
@@ -85,7 +87,7 @@ class Rosbag2DirSink:
         if layout.compression_mode != "none":
             compression = (layout.compression_mode, layout.compression_format or "zstd")
         self._file_start = None
-        sink = Ros2Sink(layout.path / name, fmt, self.source, False, compression)
+        sink = Ros2Sink(layout.path / name, fmt, self.source, False, compression, layout.storage_config)
         if fmt.kind == "mcap" and compression is None:
             # The file being written also appears as DIR/NAME_N.mcap (a second link to it): after a crash
             # it is where ros2 bag and `rostool bag reindex DIR` look for it.

@@ -110,7 +110,9 @@ RECORD_LISTS = (
               help="Leave out discovered topics no one subscribes to (until someone does).")  # fmt: skip
 @click.option("--static-topics-path", metavar="FILE", help="Not supported yet (refused in one line).")
 @click.option("--storage-preset-profile", metavar="PROFILE", help="Not supported yet (refused in one line).")
-@click.option("--storage-config-file", metavar="FILE", help="Not supported yet (refused in one line).")
+@click.option("--storage-config-file", type=click.Path(exists=True, dir_okay=False), metavar="FILE",
+              help="YAML options of the storage: mcap writer options (chunkSize, compression, ...) or "
+                   "sqlite3 pragmas (write: {pragmas: [...]}).")  # fmt: skip
 @max_rate_option
 @progress_option
 @interfaces_option
@@ -167,6 +169,16 @@ def record(ctx: click.Context, flags: RecordFlags) -> None:
             check_output(layout.path)
     elif flags.max_bag_size or flags.max_bag_duration or flags.compression_mode != "none":
         raise RostoolError(f"{output}: one file cannot be split or compressed; give a directory name instead")
+    storage_config = None
+    if flags.storage_config_file:
+        from rostool.bag.storage_config import load_storage_config
+
+        if suffix == ".bag":
+            raise RostoolError("--storage-config-file configures mcap and sqlite3 storage, not a ROS 1 .bag")
+        storage = {".db3": "sqlite3", ".mcap": "mcap"}.get(suffix, flags.storage)
+        storage_config = load_storage_config(flags.storage_config_file, storage)
+        if layout is not None:
+            layout.storage_config = storage_config
     overrides = qos_overrides(flags.qos_profile_overrides_path)
     if overrides is not None and flags.qos.given:
         raise RostoolError("choose one of --qos-profile-overrides-path and --qos-*")
@@ -185,6 +197,7 @@ def record(ctx: click.Context, flags: RecordFlags) -> None:
         max_rates=parse_max_rates(flags.max_rate),
         snapshot=flags.snapshot_mode,
         snapshot_seconds=float(flags.max_cache_duration),
+        storage_config=storage_config,
     )
     request = RecordRequest(
         options=options,
