@@ -16,8 +16,9 @@ from mcap.reader import make_reader
 from mcap.writer import CompressionType, Writer
 from rosbags.typesys import Stores, get_typestore
 
+from rostool.bag import export_cost
 from rostool.bag.export import ExportOptions, export_bag
-from rostool.bag.export_many import export_bags
+from rostool.bag.export_many import export_bags, plan
 from rostool.bag.many import expand
 from rostool.bag.parquet_concat import concat
 from rostool.errors import RostoolError
@@ -171,3 +172,82 @@ def test_batches_gather_into_row_groups_within_the_budget(tmp_path: Path) -> Non
         times = [m.log_time for _s, c, m in make_reader(handle).iter_messages() if c.topic == "/imu"]
     assert whole.column(0).to_pylist() == times
     assert whole.column("linear_acceleration.x").to_pylist() == [float(i) for i in range(6000)]
+
+
+def _tf_bag(path: Path, count: int, chunk_size: int = 1 << 20) -> Path:
+    """An indexed .mcap of tf2_msgs/TFMessage (a sequence of messages: decoded one by one)."""
+    types = STORE.types
+    with path.open("wb") as stream:
+        writer = Writer(stream, chunk_size=chunk_size, compression=CompressionType.ZSTD)
+        writer.start("ros2", "rostool-test")
+        text = STORE.generate_msgdef(TF, ros_version=2)[0]
+        channel = writer.register_channel("/tf", "cdr", writer.register_schema(TF, "ros2msg", text.encode()))
+        vec = types["geometry_msgs/msg/Vector3"](x=1.0, y=2.0, z=3.0)
+        quat = types["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=0.0, w=1.0)
+        for i in range(count):
+            header = types["std_msgs/msg/Header"](
+                stamp=types["builtin_interfaces/msg/Time"](sec=i, nanosec=0), frame_id="map"
+            )
+            transform = types["geometry_msgs/msg/TransformStamped"](
+                header=header, child_frame_id="base", transform=types["geometry_msgs/msg/Transform"](
+                    translation=vec, rotation=quat),
+            )  # fmt: skip
+            data = STORE.serialize_cdr(types[TF](transforms=[transform]), TF)
+            writer.add_message(channel, 1_000_000_000 + i, data, 1_000_000_000 + i, i)
+        writer.finish()
+    return path
+
+
+TF = "tf2_msgs/msg/TFMessage"
+
+
+def test_flat_types_are_told_from_types_with_sequences_of_messages() -> None:
+    def flat(msgtype: str) -> bool:
+        return export_cost.is_flat("ros2msg", STORE.generate_msgdef(msgtype, ros_version=2)[0].encode())
+
+    assert flat(IMU) and flat(TEXT) and flat("sensor_msgs/msg/JointState") and flat("nav_msgs/msg/Odometry")
+    assert not flat(TF) and not flat("visualization_msgs/msg/MarkerArray")
+    assert not export_cost.is_flat("ros2idl", b"module x {};")
+
+
+def test_a_bag_is_cut_where_its_decoding_costs_enough(tmp_path: Path) -> None:
+    """The cost rule (export_cost.py): a bag of messages decoded one by one is cut in as many pieces as
+    workers once its share holds PIECE_SECONDS; a cheap column-wise bag of the same count is not; several
+    bags of equal cost are spread whole; only wanted topics count."""
+    per_piece = int(export_cost.PIECE_SECONDS / export_cost.NESTED_MESSAGE)
+    tf = _tf_bag(tmp_path / "tf.mcap", 2 * per_piece + 100)
+    imu = _bag(tmp_path / "imu.mcap", count=600)
+    assert export_cost.seconds(tf) > 100 * export_cost.seconds(imu) > 0
+
+    def pieces(bags: list[Path], jobs: int | None = 2, **settings: object) -> list[int]:
+        options = ExportOptions(**{"fmt": "parquet", "out": tmp_path / "out", **settings})  # type: ignore[arg-type]
+        return [item.pieces for item in plan(expand(bags), options, None, jobs, False)[1]]
+
+    assert pieces([tf]) == [2, 2]
+    assert pieces([tf], jobs=3) == [2, 2]  # three workers, but not 3 x PIECE_SECONDS of work
+    assert pieces([imu]) == [1]
+    assert pieces([tf, imu]) == [2, 2, 1]
+    copies = []
+    for name in "abcd":
+        copies.append(tmp_path / f"{name}.mcap")
+        shutil.copy(tf, copies[-1])
+    assert pieces(copies) == [1, 1, 1, 1]  # four bags of equal weight on two workers: none cut
+    assert pieces([tf], topics=["/other"]) == [1]
+    assert pieces([tf], fmt="csv") == [1]
+    assert plan(expand([tf]), ExportOptions(fmt="parquet", out=tmp_path), None, None, False)[0] is not None
+    assert plan(expand([imu]), ExportOptions(fmt="parquet", out=tmp_path), None, None, False)[0] is None
+
+
+def test_a_bag_of_messages_decoded_one_by_one_cut_in_pieces_exports_the_same_table(tmp_path: Path) -> None:
+    bag = _tf_bag(tmp_path / "tf.mcap", 3000, chunk_size=16 * 1024)
+    whole = _export([bag], tmp_path / "whole", jobs=1, piece_bytes=1)
+    cut = _export([bag], tmp_path / "cut", jobs=2, piece_bytes=1)
+    assert whole == cut == 3000
+    one, joined = (pq.read_table(tmp_path / where / "tf.parquet") for where in ("whole", "cut"))
+    assert one.equals(joined)
+    with bag.open("rb") as handle:  # against the mcap library and rosbags' deserializer
+        decoded = [STORE.deserialize_cdr(m.data, TF) for _s, _c, m in make_reader(handle).iter_messages()]
+    assert joined.column(0).to_pylist() == [1_000_000_000 + i for i in range(3000)]
+    assert [row[0]["header"]["stamp"]["sec"] for row in joined.column("transforms").to_pylist()] == [
+        msg.transforms[0].header.stamp.sec for msg in decoded
+    ]

@@ -1,8 +1,8 @@
 """`bag export` of one bag or many: each bag exported on its own (in local processes or Ray tasks) and the
-results summed. A big indexed .mcap can be cut into runs of chunks exported in parallel, whose tables are
-then joined byte-wise (parquet_concat.py) into the files one export writes (`piece_bytes`; off by default
-until the join is cheaper, see PIECE_BYTES). Into object storage each bag is
-written to a local folder first, uploaded when complete."""
+results summed. How the work is spread follows its estimated cost (export_cost.py), not only its bytes: worker
+processes when there is enough of it, and a big indexed .mcap cut into runs of chunks exported in parallel,
+whose tables are then joined byte-wise (parquet_concat.py) into the files one export writes. Into object
+storage each bag is written to a local folder first, uploaded when complete."""
 
 from __future__ import annotations
 
@@ -15,11 +15,6 @@ from typing import Any
 from rostool.bag.export import ExportOptions, ExportResult
 from rostool.bag.many import BagItem, Results
 
-# The least a piece of a bag holds (its worker's start-up must pay off); 0: bags are not cut. Off for now:
-# measured on 2 cores, one 1 GB .mcap exported in 2.95 s whole and 3.57 s in two pieces, the join's
-# pure-Python footer work (~0.9 s for two 142 MiB files of 339 row groups) eating the gain.
-PIECE_BYTES = 0
-
 
 def export_bags(
     items: Sequence[BagItem],
@@ -28,9 +23,11 @@ def export_bags(
     jobs: int | None,
     keep_going: bool,
     runner: Callable[..., Results[ExportResult]] | None,
-    piece_bytes: int = PIECE_BYTES,
+    piece_bytes: int | None = None,
 ) -> tuple[ExportResult, int]:
-    """The sum of what was exported, and of how many bags (fewer than given with `keep_going`)."""
+    """The sum of what was exported, and of how many bags (fewer than given with `keep_going`).
+    `piece_bytes`: cut every .mcap of at least that many bytes in as many pieces as workers (0: none), instead
+    of the estimated cost's rule (`plan`)."""
     from rostool.bag.export import join_pieces
     from rostool.bag.many import successes
 
@@ -38,7 +35,7 @@ def export_bags(
     total = ExportResult("")
     exported = 0
     work = partial(_export_one, options, several, remote_out)
-    cut = _cut(items, options, remote_out, jobs, runner is not None, piece_bytes)
+    jobs, cut = plan(items, options, remote_out, jobs, runner is not None, piece_bytes)
     done: dict[str, list[ExportResult]] = {}  # a cut bag's pieces exported so far
     unfinished = {item.name for item in cut if item.pieces > 1}
     try:
@@ -66,29 +63,39 @@ def export_bags(
     return total, exported
 
 
-def _cut(
+def plan(
     items: Sequence[BagItem],
     options: ExportOptions,
     remote_out: Any,
     jobs: int | None,
     ray: bool,
-    piece_bytes: int,
-) -> list[BagItem]:
-    """The work: each bag, and each big .mcap (Parquet tables only, no images, a local output) cut into as
-    many pieces as there are workers, each of at least `piece_bytes` (0: none is cut)."""
-    from rostool.bag.many import PARALLEL_FROM_BYTES, default_jobs
+    piece_bytes: int | None = None,
+) -> tuple[int | None, list[BagItem]]:
+    """The local jobs and the work: each bag, or its pieces. The rule (export_cost.py estimates seconds of
+    one core): without -j, worker processes when the whole costs at least PARALLEL_FROM (or weighs
+    many.PARALLEL_FROM_BYTES); a bag is cut (an indexed local .mcap, Parquet tables, no images) into as
+    many pieces as its share of the work holds PIECE_SECONDS, at most one per worker: with as many bags as
+    workers or more, none is cut unless it outweighs the others."""
+    from rostool.bag import export_cost
+    from rostool.bag.many import default_jobs
 
-    if piece_bytes <= 0:
-        return list(items)
     sizes = [_mcap_bytes(item.path) for item in items]
-    workers = jobs or (default_jobs() if ray or sum(sizes) >= PARALLEL_FROM_BYTES else 1)
+    costs = [export_cost.seconds(item.path, options.topics) for item in items]
+    if jobs is None and not ray and sum(costs) >= export_cost.PARALLEL_FROM:
+        jobs = default_jobs()  # else many.run's rule by bytes (images cost more than their estimate)
+    workers = jobs or default_jobs()
     if workers < 2 or options.fmt != "parquet" or options.images is not None or remote_out is not None:
-        return list(items)
+        return jobs, list(items)
     work = []
-    for item, size in zip(items, sizes, strict=True):
-        pieces = max(1, min(workers, size // max(1, piece_bytes)))
+    share = max(export_cost.PIECE_SECONDS, sum(costs) / (2 * workers))
+    for item, size, cost in zip(items, sizes, costs, strict=True):
+        if piece_bytes is not None:
+            pieces = min(workers, size // piece_bytes) if piece_bytes > 0 else 1
+        else:
+            pieces = min(workers, int(cost // share)) if size else 1
+        pieces = max(1, pieces)
         work.extend(replace(item, piece=k, pieces=pieces) for k in range(pieces))
-    return work
+    return jobs, work
 
 
 def _remove_pieces(out: Path, partition: str | None) -> None:
