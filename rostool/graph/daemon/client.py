@@ -43,6 +43,10 @@ class DaemonSilent(Exception):
     """A daemon took the connection but did not answer in time, or broke the protocol."""
 
 
+class NotRelayed(Exception):
+    """The daemon cannot relay this subscription (too many at once): the verb subscribes itself."""
+
+
 class OtherBuild(Exception):
     """The daemon is of another rostool build; it stops itself to be replaced."""
 
@@ -67,12 +71,30 @@ class DaemonClient:
         """The daemon's answer's value; RostoolError for the backend's own one-line errors."""
         sock = self._connect()
         with sock:
-            sock.settimeout(timeout)
-            try:
-                wire.send(sock, message)
-                answer = wire.receive(sock)
-            except wire.WireError as err:
-                raise DaemonSilent(str(err)) from None
+            return self._asked(sock, message, timeout)
+
+    def relay(self, topic: str, qos: dict[str, Any]) -> socket.socket:
+        """A connection on which the daemon streams `topic`'s messages (wire.py's frames) until it is
+        closed; raises as `request` does, and NotRelayed when the daemon cannot serve it."""
+        sock = self._connect()
+        try:
+            self._asked(sock, {"op": "subscribe", "build": self.build, "topic": topic, "qos": qos})
+        except BaseException:
+            sock.close()
+            raise
+        sock.settimeout(None)
+        return sock
+
+    @staticmethod
+    def _asked(sock: socket.socket, message: dict[str, Any], timeout: float = ANSWER_SECONDS) -> Any:
+        sock.settimeout(timeout)
+        try:
+            wire.send(sock, message)
+            answer = wire.receive(sock)
+        except wire.WireError as err:
+            raise DaemonSilent(str(err)) from None
+        if isinstance(answer, dict) and "direct" in answer:
+            raise NotRelayed(str(answer["direct"]))
         if not isinstance(answer, dict):
             raise DaemonSilent("an answer that is not an object")
         if "build" in answer:

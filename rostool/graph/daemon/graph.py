@@ -9,14 +9,18 @@ bypassed with one warning line; a daemon of another build is replaced.
 from __future__ import annotations
 
 import sys
-from collections.abc import Callable
+import threading
+from collections.abc import Callable, Mapping
+from dataclasses import asdict
 from typing import TYPE_CHECKING, Any, Literal
 
 from rostool.errors import RostoolError
-from rostool.graph.daemon.client import DaemonAbsent, DaemonClient, DaemonSilent, OtherBuild
+from rostool.graph.daemon.client import DaemonAbsent, DaemonClient, DaemonSilent, NotRelayed, OtherBuild
 from rostool.graph.daemon.place import PlaceRefused
 from rostool.graph.daemon.queries import SERVED
+from rostool.graph.daemon.relay_client import RelayedSubscription
 from rostool.graph.ros2_base.names import resolve
+from rostool.interfaces.ros2_types import Ros2Types
 
 if TYPE_CHECKING:
     from rostool.graph.base import (
@@ -24,10 +28,14 @@ if TYPE_CHECKING:
         ActionSummary,
         Graph,
         NodeInfo,
+        OnError,
+        OnMessage,
         ServiceInfo,
+        Subscription,
         TopicEndpoint,
         TopicInfo,
     )
+    from rostool.graph.qos import QosRequest
     from rostool.graph.recording import Encoding
 
 
@@ -40,14 +48,24 @@ class DaemonGraph:
         self._client = client
         self._make_direct = direct
         self._direct: Graph | None = None
+        self._direct_lock = threading.Lock()  # a relay's reading thread may need it too
         self._bypass = False
+        self._qos: QosRequest | None = None
+        self._types: LentTypes | None = None
+        self._relays: list[RelayedSubscription] = []
 
     # --- the direct backend ----------------------------------------------------------------------
     @property
     def direct(self) -> Graph:
-        if self._direct is None:
-            self._direct = self._make_direct()
-        return self._direct
+        with self._direct_lock:
+            if self._direct is None:
+                direct = self._make_direct()
+                if self._qos is not None:
+                    direct.use_qos(self._qos)
+                if self._types is not None:
+                    self._types.lend_to(direct.types)
+                self._direct = direct
+            return self._direct
 
     def __getattr__(self, name: str) -> Any:
         if name.startswith("__"):
@@ -56,9 +74,55 @@ class DaemonGraph:
 
     @property
     def types(self) -> Any:
+        """The direct graph's types once it exists. Before (a relayed subscription needs no direct graph),
+        types of the daemon's distro, which pass on what is registered in them to the direct graph made
+        later (bag play registers a bag's types before it publishes)."""
+        if self._direct is None and self._types is None and not self._bypass:
+            distro = self._daemon_distro()
+            if distro is not None:
+                self._types = LentTypes(distro)
+        if self._direct is None and self._types is not None:
+            return self._types
         return self.direct.types
 
+    def _daemon_distro(self) -> str | None:
+        try:
+            return str(self._client.query("type_distro", []))
+        except (DaemonAbsent, DaemonSilent, OtherBuild, RostoolError):
+            return None  # the queries that follow say why, and answer directly
+
+    def use_qos(self, qos: QosRequest) -> None:
+        self._qos = qos
+        if self._direct is not None:
+            self._direct.use_qos(qos)
+
+    def subscribe(self, topic: str, on_message: OnMessage, on_error: OnError | None = None) -> Subscription:
+        """A subscription relayed by the daemon, whose reader already matched the topic's publishers (the
+        first message comes without this process joining the graph); directly when no daemon serves."""
+        report = on_error or self._warn
+
+        def directly() -> Subscription:
+            return self.direct.subscribe(topic, on_message, report)
+
+        def relayed() -> Subscription:
+            resolved = resolve(topic)
+            qos = asdict(self._qos) if self._qos is not None else {}
+            try:
+                sock = self._client.relay(resolved, qos)
+            except PlaceRefused:
+                raise
+            except (NotRelayed, RostoolError):  # the direct subscription says what is wrong, if anything
+                return directly()
+            relay = RelayedSubscription(sock, resolved, self.types, on_message, report, self._warn, directly)
+            self._relays.append(relay)
+            return relay
+
+        return self._served(relayed, directly)  # type: ignore[no-any-return]
+
     def close(self) -> None:
+        for relay in self._relays:
+            relay.close()
+        self._relays.clear()
         if self._direct is not None:
             self._direct.close()
             self._direct = None
@@ -83,17 +147,22 @@ class DaemonGraph:
 
     # --- queries ---------------------------------------------------------------------------------
     def _ask(self, method: str, *args: Any) -> Any:
+        def asked() -> Any:
+            own = getattr(self._direct, "participant_guid", None) if self._direct is not None else None
+            return SERVED[method][1](self._client.query(method, list(args), own))
+
+        return self._served(asked, lambda: getattr(self.direct, method)(*args))
+
+    def _served(self, ask: Callable[[], Any], directly: Callable[[], Any]) -> Any:
+        """`ask()` the daemon; `directly()` when it cannot answer (from then on, for this process)."""
         if not self._bypass:
             try:
-                own = getattr(self._direct, "participant_guid", None) if self._direct is not None else None
-                return SERVED[method][1](self._client.query(method, list(args), own))
+                return ask()
             except DaemonAbsent:
                 # the direct graph's discovery first: the daemon's start-up would otherwise take the CPU
                 # this process needs to start its own participant
-                direct = self.direct
+                _ = self.direct
                 self._start()
-                self._bypass = True
-                return getattr(direct, method)(*args)
             except OtherBuild:
                 self._client.start_detached(replacing=True)  # it waits for the old one's lock
             except DaemonSilent as err:
@@ -102,7 +171,7 @@ class DaemonGraph:
             except PlaceRefused as err:
                 self._warn(f"{err}; answering directly")
             self._bypass = True
-        return getattr(self.direct, method)(*args)
+        return directly()
 
     def _start(self) -> None:
         if self._client.lock_holder() is None:
@@ -147,6 +216,23 @@ class DaemonGraph:
 
     def action_info(self, name: str, wait: float) -> ActionInfo:
         return self._ask("action_info", resolve(name), wait)  # type: ignore[no-any-return]
+
+
+class LentTypes(Ros2Types):
+    """Types made before the direct graph: what is registered in them reaches its types too."""
+
+    _also: Ros2Types | None = None
+
+    def lend_to(self, other: Ros2Types) -> None:
+        missing = {name: defs for name, defs in self.store.fielddefs.items() if not other.in_store(name)}
+        if missing:
+            other.register(missing)
+        self._also = other
+
+    def register(self, typs: Mapping[str, Any]) -> None:
+        super().register(typs)
+        if self._also is not None:
+            self._also.register(typs)
 
 
 def daemon_graph(requested_backend: str | None, direct: Callable[[], Graph]) -> Graph:

@@ -1,5 +1,6 @@
 """The daemon process: one long-lived graph of the selected backend, its read-only queries served on a
-Unix-domain socket (0600, in the user's 0700 directory); no TCP or UDP port of its own.
+Unix-domain socket (0600, in the user's 0700 directory); no TCP or UDP port of its own. It also relays
+subscriptions (relay_server.py): a verb's reader in this graph, its messages streamed to the verb.
 
 Life: take the key's lock (held until exit: a second daemon of the same key waits or gives up), open the
 graph and let discovery settle, then bind the socket; clients meanwhile find the lock held and answer
@@ -27,12 +28,14 @@ from rostool.errors import RostoolError
 from rostool.graph.daemon import wire
 from rostool.graph.daemon.place import DaemonPlace, build_id, daemon_place
 from rostool.graph.daemon.queries import SERVED
+from rostool.graph.daemon.relay_server import Relay, qos_of
 
 DEFAULT_IDLE_SECONDS = 7200.0  # as ros2 daemon's default timeout
 IDLE_ENV = "ROSTOOL_DAEMON_IDLE"
 LOCK_WAIT_SECONDS = 10.0  # a replaced daemon's time to go
 CLIENT_SECONDS = 5.0  # how long one client may take to send its request or read the answer
 MAX_CLIENTS = 256
+MAX_RELAYS = 128  # subscriptions relayed at once; past it a client subscribes itself
 NODE_NAME = "_rostool_daemon"  # hidden (a leading `_`), as ros2cli's own daemon node
 log = logging.getLogger("rostool.daemon")
 
@@ -50,6 +53,8 @@ class Daemon:
         self.clients = threading.BoundedSemaphore(MAX_CLIENTS)
         self.backend = ""
         self.graph: Any = None
+        self.relays: set[Relay] = set()
+        self.relays_lock = threading.Lock()
 
     # --- the graph -------------------------------------------------------------------------------
     def open_graph(self) -> None:
@@ -69,11 +74,12 @@ class Daemon:
             return {"ok": True}
         if op != "query":
             return {"error": f"graph daemon: unknown request {op!r}"}
-        if request.get("build") != self.build:
-            log.info("a client of build %s asked: this daemon (%s) stops", request.get("build"), self.build)
-            self.stopping.set()
-            return {"build": self.build}
+        other = self._other_build(request)
+        if other is not None:
+            return other
         method, args = request.get("method"), request.get("args", [])
+        if method == "type_distro":  # the distro the client decodes relayed messages with
+            return {"ok": self.graph.types.distro}
         served = SERVED.get(str(method))
         if served is None or not isinstance(args, list):
             return {"error": f"graph daemon: {method!r} is not a query it answers"}
@@ -83,6 +89,44 @@ class Daemon:
                 return {"ok": served[0](getattr(self.graph, str(method))(*args))}
         except RostoolError as err:
             return {"error": str(err)}
+
+    def _other_build(self, request: dict[str, Any]) -> dict[str, Any] | None:
+        if request.get("build") == self.build:
+            return None
+        log.info("a client of build %s asked: this daemon (%s) stops", request.get("build"), self.build)
+        self.stopping.set()
+        return {"build": self.build}
+
+    def relay(self, connection: socket.socket, request: dict[str, Any]) -> None:
+        """Serve a "subscribe" request: answer, then stream the topic's messages until the client goes."""
+        reply = self._other_build(request)
+        topic = request.get("topic")
+        if reply is None and not isinstance(topic, str):
+            reply = {"error": "graph daemon: a subscription names its topic"}
+        with self.relays_lock:
+            full = len(self.relays) >= MAX_RELAYS
+        if reply is None and full:
+            reply = {"direct": f"the graph daemon relays {MAX_RELAYS} subscriptions already"}
+        relay = None
+        if reply is None:
+            relay = Relay(self.graph, self.graph_lock, connection, str(topic))
+            try:
+                relay.open(qos_of(request.get("qos", {})))
+                reply = {"ok": True}
+            except RostoolError as err:
+                reply, relay = {"error": str(err)}, None
+        wire.send(connection, reply)
+        if relay is None:
+            return
+        with self.relays_lock:
+            self.relays.add(relay)
+        log.info("relaying %s (%d relays)", topic, len(self.relays))
+        try:
+            relay.run()
+        finally:
+            with self.relays_lock:
+                self.relays.discard(relay)
+            log.info("relay of %s closed", topic)
 
     def status(self) -> dict[str, Any]:
         with self.graph_lock:
@@ -97,6 +141,7 @@ class Daemon:
             "running": True, "pid": os.getpid(), "socket": str(self.place.socket), "backend": self.backend,
             "domain": int(dict(self.place.fields)["domain"]), "uptime": uptime,
             "build": self.build, "log": str(self.place.log), "graph": size, "key": dict(self.place.fields),
+            "relays": sorted(relay.topic for relay in list(self.relays)),
         }  # fmt: skip
 
     # --- the socket ------------------------------------------------------------------------------
@@ -107,7 +152,7 @@ class Daemon:
         threading.Thread(target=self._keep_current, name="poll", daemon=True).start()
         try:
             while not self.stopping.is_set():
-                if time.monotonic() - self.last_request > self.idle:
+                if not self.relays and time.monotonic() - self.last_request > self.idle:
                     log.info("idle for %g s: exiting", self.idle)
                     break
                 try:
@@ -140,6 +185,9 @@ class Daemon:
             with connection:
                 connection.settimeout(CLIENT_SECONDS)
                 request = wire.receive(connection)
+                if isinstance(request, dict) and request.get("op") == "subscribe":
+                    self.relay(connection, request)
+                    return
                 reply = self.answer(request) if isinstance(request, dict) else {"error": "bad request"}
                 wire.send(connection, reply)
         except wire.WireError as err:
@@ -151,6 +199,10 @@ class Daemon:
             self.clients.release()
 
     def close(self) -> None:
+        with self.relays_lock:
+            relays = list(self.relays)
+        for relay in relays:
+            relay.stop()
         if self.graph is not None:
             with contextlib.suppress(Exception):
                 self.graph.close()

@@ -4,6 +4,13 @@ Requests: {"op": "query", "build": B, "method": M, "args": [...], "own": GUID (h
 participant)}, {"op": "status"}, {"op": "stop"}.
 Answers: {"ok": value}, {"error": "one line"} (a RostoolError the backend raised) or {"build": B} when
 the daemon is of another build than the client (it then stops, to be replaced).
+
+A relay: {"op": "subscribe", "build": B, "topic": T, "qos": {...}} (the verb's --qos-* request) is answered
+{"ok": ...} (or as a query is refused, or {"direct": why} when the daemon cannot relay it), then the daemon
+streams binary frames until the client closes: a header (payload length, kind, receive time in ns) and the
+payload: MESSAGE (CDR bytes), TYPE (JSON: the type's name and .msg definition, before its first message),
+WARNING and ERROR (one line of text), DIRECT (one line: the daemon cannot serve this subscription, which
+the client then makes itself).
 """
 
 from __future__ import annotations
@@ -15,6 +22,10 @@ from typing import Any
 
 MAX_MESSAGE = 32 * 1024 * 1024
 _HEADER = struct.Struct(">I")
+MAX_SAMPLE = 512 * 1024 * 1024  # a relayed message's bytes (a DDS sample is at most 4 GiB)
+_FRAME = struct.Struct(">IcQ")
+MESSAGE, TYPE, WARNING, ERROR, DIRECT = b"m", b"t", b"w", b"e", b"d"
+_SMALL = 64 * 1024  # payloads up to this size go out in one write with their header
 
 
 class WireError(Exception):
@@ -41,14 +52,39 @@ def receive(sock: socket.socket) -> Any:
         raise WireError(f"not JSON: {err}") from None
 
 
+def send_frame(sock: socket.socket, kind: bytes, stamp_ns: int, payload: bytes) -> None:
+    """One frame of a relay's stream."""
+    if len(payload) > MAX_SAMPLE:
+        raise WireError(f"a frame of {len(payload)} bytes is over the {MAX_SAMPLE}-byte limit")
+    header = _FRAME.pack(len(payload), kind, stamp_ns)
+    try:
+        if len(payload) <= _SMALL:
+            sock.sendall(header + payload)
+        else:
+            sock.sendall(header)
+            sock.sendall(payload)
+    except OSError as err:
+        raise WireError(f"cannot send: {err}") from None
+
+
+def receive_frame(sock: socket.socket) -> tuple[bytes, int, bytes]:
+    """(kind, receive time in ns, payload) of a relay's next frame."""
+    size, kind, stamp = _FRAME.unpack(_exactly(sock, _FRAME.size))
+    if size > MAX_SAMPLE:
+        raise WireError(f"a frame of {size} bytes is over the {MAX_SAMPLE}-byte limit")
+    return kind, stamp, _exactly(sock, size)
+
+
 def _exactly(sock: socket.socket, size: int) -> bytes:
-    chunks = bytearray()
-    while len(chunks) < size:
+    buffer = bytearray(size)
+    view = memoryview(buffer)
+    done = 0
+    while done < size:
         try:
-            chunk = sock.recv(min(size - len(chunks), 1 << 20))
+            count = sock.recv_into(view[done:], min(size - done, 1 << 20))
         except OSError as err:  # socket.timeout included
             raise WireError(f"cannot receive: {err or 'timed out'}") from None
-        if not chunk:
+        if not count:
             raise WireError("closed before the message ended")
-        chunks.extend(chunk)
-    return bytes(chunks)
+        done += count
+    return bytes(buffer)

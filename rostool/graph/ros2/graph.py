@@ -13,6 +13,7 @@ rostool does not know asks the publisher's node for it (type_description.py).
 
 from __future__ import annotations
 
+import contextlib
 import threading
 import time
 from collections.abc import Callable, Iterable, Sequence
@@ -369,6 +370,19 @@ class DdsSubscription(DrainingSubscription):
             self._closed.wait(0.05)
             cache.poll()
         return writers
+
+    def _drop(self) -> None:
+        """Delete the reader and its wait set: a long-lived graph (the daemon's, relaying subscriptions)
+        outlives its subscriptions, and cyclonedds deletes an entity only when told to."""
+        waitset, self._waitset = self._waitset, None
+        reader, self._reader = self._reader, None
+        with contextlib.suppress(Exception):  # the participant is gone already: so are they
+            if waitset is not None:
+                wakeup = waitset.wakeup
+                waitset.__del__()
+                wakeup.__del__()
+            if reader is not None:
+                self._graph.session.drop(reader)
 
     def _matched_count(self) -> int | None:
         from cyclonedds.core import DDSException

@@ -40,6 +40,10 @@ class DrainingSubscription:
         self._on_error = on_error
         self._closed = threading.Event()
         self._expected: int | None = None  # the publishers discovery knew when the reader was made
+        # the QoS request and the warnings' place when it was made: a graph daemon's subscriptions each
+        # serve a client of its own (Ros2Base.subscribe_for)
+        self._request = graph.qos_request
+        self._warn = graph.warn
         self._setup()
         self._since = self._discovery_started()
         self._thread = threading.Thread(target=self._run, name=f"{self.thread_name} {topic}", daemon=True)
@@ -117,16 +121,15 @@ class DrainingSubscription:
         return self._graph.topic_views(self._topic)
 
     def _wait_for_type(self) -> tuple[str, QosProfile] | None:
-        graph = self._graph
         while not self._closed.is_set():
             endpoints = self._endpoints()
             writers = [e for e in endpoints if e.is_writer]
             known = writers or endpoints
             if known and (writers or time.monotonic() - self._since >= SUBSCRIBERS_ONLY_WAIT):
                 store_name = self._known_type(known[0].type_name, writers)
-                profile, notes = adapt_to_publishers(graph.qos_request, [w.qos for w in writers])
+                profile, notes = adapt_to_publishers(self._request, [w.qos for w in writers])
                 for note in notes:
-                    graph.warn(note)
+                    self._warn(note)
                 self._expected = len(writers)
                 return store_name, profile
             self._closed.wait(DISCOVERY_POLL)
@@ -135,7 +138,7 @@ class DrainingSubscription:
     def _cache_profile(self, profile: QosProfile) -> QosProfile:
         """A reader's depth is local (it never affects matching): a deep cache lets a busy moment pass
         without losing samples a reliable publisher already delivered."""
-        if self._graph.qos_request.depth is None and profile.depth:
+        if self._request.depth is None and profile.depth:
             return replace(profile, depth=max(profile.depth, READER_CACHE_DEPTH))
         return profile
 
@@ -159,11 +162,11 @@ class DrainingSubscription:
         offered = self._offered()
         if not offered:
             return None
-        adapted, notes = adapt_to_publishers(self._graph.qos_request, offered)
+        adapted, notes = adapt_to_publishers(self._request, offered)
         if adapted.reliability == profile.reliability and adapted.durability == profile.durability:
             return None  # the user's own --qos-* choice, or nothing better to do
         for note in notes:
-            self._graph.warn(note)
+            self._warn(note)
         return adapted
 
     def _report_incompatible(self, policy: str, profile: QosProfile) -> None:
@@ -179,4 +182,4 @@ class DrainingSubscription:
         if offered and not any(serves(qos, profile) for qos in offered):
             self._on_error(f"{text} (adjust --qos-reliability / --qos-durability)")
         else:
-            self._graph.warn(f"{text}; no messages will be received from it")
+            self._warn(f"{text}; no messages will be received from it")
