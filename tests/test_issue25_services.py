@@ -204,13 +204,14 @@ def test_recorder_snapshot_service_writes_the_held_second(
 # --- ros2 bag record --storage-config-file ---------------------------------------------------------------
 
 
-def record_some(env: dict[str, str], talker: RclpyPeer, args: list[str], messages: int = 40) -> str:
-    """Record /chatter with `args` until `messages` more were published; the recorder's stderr."""
-    recorder = Watched(rostool_popen(["--ros2", "bag", "record", "/chatter", *args], env,
+def record_some(env: dict[str, str], talker: RclpyPeer, args: list[str], topic: str = "/chatter") -> str:
+    """Record `topic` (the talker's, which nothing else recorded) with `args` until 40 more messages were
+    published; the recorder's stderr."""
+    recorder = Watched(rostool_popen(["--ros2", "bag", "record", topic, *args], env,
                                      stdin=subprocess.DEVNULL))  # fmt: skip
     try:
         matched = int(talker.wait_for("matched", lambda e: e["subscribers"] >= 1, timeout=30)["count"])
-        talker.wait_for("published", lambda e: e["count"] > matched + messages, timeout=30)
+        talker.wait_for("published", lambda e: e["count"] > matched + 40, timeout=30)
     finally:
         _out, err = recorder.stop()
     assert recorder.proc.returncode == 0, err
@@ -251,6 +252,37 @@ def test_storage_config_file_sets_mcap_compression_and_chunk_size(
 
 
 @pytest.mark.parametrize("distro", ["jazzy"], indirect=True)
+def test_storage_preset_profiles_and_a_config_file_over_them(
+    graph_env: dict[str, str], start_peer: Start, tmp_path: Path
+) -> None:
+    """zstd_small (zstd, 4 MiB chunks) with the file's chunkSize over it; fastwrite writes no chunks."""
+    from mcap.reader import make_reader
+
+    config = tmp_path / "smaller_chunks.yaml"
+    config.write_text("chunkSize: 2048\n")
+    talker = start_peer("--name", "talker", "--talk", "/chatter", "--rate", "50")
+    other = start_peer("--name", "other", "--talk", "/other", "--rate", "50")
+    small, fast = tmp_path / "small", tmp_path / "fast"
+    record_some(graph_env, talker, ["-o", str(small), "--storage-preset-profile", "zstd_small",
+                                    "--storage-config-file", str(config)])  # fmt: skip
+    record_some(graph_env, other, ["-o", str(fast), "--storage-preset-profile", "fastwrite"], "/other")
+    contiguous_numbers(small)
+    with open(small / "small_0.mcap", "rb") as stream:
+        summary = make_reader(stream).get_summary()
+        assert summary is not None
+        chunks = summary.chunk_indexes
+        assert len(chunks) >= 2 and {c.compression for c in chunks} == {"zstd"}, chunks
+        assert all(2048 <= c.uncompressed_size < 2048 + 512 for c in chunks[:-1]), chunks
+    later = contiguous_numbers(fast)
+    with open(fast / "fast_0.mcap", "rb") as stream:
+        reader = make_reader(stream)
+        summary = reader.get_summary()
+        assert summary is not None and summary.chunk_indexes == []  # messages straight in the data section
+        stream.seek(0)
+        assert len(list(make_reader(stream).iter_messages())) == len(later)
+
+
+@pytest.mark.parametrize("distro", ["jazzy"], indirect=True)
 def test_storage_config_file_runs_sqlite3_pragmas(
     graph_env: dict[str, str], start_peer: Start, tmp_path: Path
 ) -> None:
@@ -277,19 +309,23 @@ def test_storage_config_file_runs_sqlite3_pragmas(
         ("noChunking: maybe\n", "mcap", "noChunking must be true or false"),
         ("write:\n  pragmas: ['x; DROP TABLE messages']\n", "sqlite3", "bad pragma 'x; DROP TABLE messages'"),
         ("writes: {}\n", "sqlite3", "unknown sqlite3 option writes"),
+        (None, "mcap", "--storage-preset-profile resilient: unknown for mcap storage (known: fastwrite, "),
     ],
 )
 def test_storage_config_file_refuses_bad_options_in_one_line(
-    text: str, storage: str, said: str, tmp_path: Path
+    text: str | None, storage: str, said: str, tmp_path: Path
 ) -> None:
     from tests.support import ros2_env
 
     config = tmp_path / "config.yaml"
-    config.write_text(text)
+    given = ["--storage-preset-profile", "resilient"]
+    if text is not None:
+        config.write_text(text)
+        given = ["--storage-config-file", str(config)]
     bag = tmp_path / "never"
-    done = rostool(["--ros2", "bag", "record", "/chatter", "-o", str(bag), "-s", storage,
-                    "--storage-config-file", str(config)], ros2_env(), timeout=60)  # fmt: skip
+    done = rostool(["--ros2", "bag", "record", "/chatter", "-o", str(bag), "-s", storage, *given], ros2_env(),
+                   timeout=60)  # fmt: skip
     assert done.returncode != 0
     lines = done.stderr.strip().splitlines()
-    assert len(lines) == 1 and said in lines[0] and str(config) in lines[0], done.stderr
+    assert len(lines) == 1 and said in lines[0] and given[1] in lines[0], done.stderr
     assert not bag.exists()

@@ -1,4 +1,6 @@
-"""`ros2 bag record --storage-config-file FILE`: the storage plugin's own YAML options, as rosbag2 reads them.
+"""`ros2 bag record --storage-config-file FILE` (and `--storage-preset-profile NAME`, rosbag2's presets of
+the same options, which the file's options override): the storage plugin's own YAML options, as rosbag2
+reads them.
 
 - mcap: rosbag2_storage_mcap's keys (mcap::McapWriterOptions): chunkSize, compression (None, Lz4, Zstd),
   compressionLevel, noChunking, noMessageIndex, noSummary, noCRC / noChunkCRC / noAttachmentCRC /
@@ -14,6 +16,7 @@ An unknown key or a bad value is one line naming it.
 
 from __future__ import annotations
 
+import copy
 import re
 import sqlite3
 from dataclasses import dataclass, field
@@ -35,6 +38,15 @@ _COMPRESSIONS = ("None", "Lz4", "Zstd")
 _LEVELS = ("Fastest", "Fast", "Default", "Slow", "Slowest")
 _PRAGMA = re.compile(r"\s*[A-Za-z_]\w*\s*(=\s*[\w.+-]+|\(\s*[\w.+-]+\s*\))?\s*")
 DEFAULT_CHUNK_SIZE = 768 * 1024  # mcap::McapWriterOptions' default
+# rosbag2's --storage-preset-profile values, as its storage plugins define them
+PRESETS: dict[str, dict[str, dict[str, Any]]] = {
+    "mcap": {
+        "fastwrite": {"noChunking": True, "noCRC": True},
+        "zstd_fast": {"compression": "Zstd", "compressionLevel": "Fastest", "noCRC": True},
+        "zstd_small": {"compression": "Zstd", "compressionLevel": "Slowest", "chunkSize": 4 * 1024 * 1024},
+    },
+    "sqlite3": {"resilient": {"write": {"pragmas": ["journal_mode = WAL", "synchronous = NORMAL"]}}},
+}
 
 
 @dataclass(frozen=True)
@@ -53,25 +65,45 @@ class StorageConfig:
         return partial(PragmaSqlite3Writer, pragmas=self.pragmas, source=self.source)
 
 
-def load_storage_config(path: str, storage: str) -> StorageConfig:
+def load_storage_config(path: str | None, storage: str, preset: str | None = None) -> StorageConfig:
+    """The options of `--storage-preset-profile` (rosbag2's presets), then the config file's over them."""
+    document: dict[Any, Any] = {}
+    source = f"--storage-config-file {path}"
+    if preset is not None:
+        source = f"--storage-preset-profile {preset}"
+        known = PRESETS[storage]
+        if preset not in known:
+            raise _bad(source, f"unknown for {storage} storage (known: {', '.join(sorted(known))})")
+        document = copy.deepcopy(known[preset])
+    if path is not None:
+        source = f"--storage-config-file {path}"
+        given = _read(path, source)
+        if storage == "sqlite3" and "write" in document and isinstance(given.get("write"), dict):
+            pragmas = [*document["write"]["pragmas"], *(given["write"].get("pragmas") or [])]
+            given["write"] = {**given["write"], "pragmas": pragmas}
+        document = {**document, **given}
+    if storage == "mcap":
+        return StorageConfig(storage, source, mcap=_mcap_options(document, source))
+    return StorageConfig(storage, source, pragmas=_pragmas(document, source))
+
+
+def _read(path: str, source: str) -> dict[Any, Any]:
     import yaml
 
     try:
         document = yaml.safe_load(Path(path).read_text(encoding="utf-8"))
     except OSError as err:
-        raise RostoolError(f"--storage-config-file {path}: {err.strerror or err}") from err
+        raise _bad(source, err.strerror or str(err)) from err
     except yaml.YAMLError as err:
-        raise RostoolError(f"--storage-config-file {path}: not YAML: {' '.join(str(err).split())}") from err
+        raise _bad(source, f"not YAML: {' '.join(str(err).split())}") from err
     document = {} if document is None else document
     if not isinstance(document, dict):
-        raise RostoolError(f"--storage-config-file {path}: expected a mapping of options")
-    if storage == "mcap":
-        return StorageConfig(storage, path, mcap=_mcap_options(document, path))
-    return StorageConfig(storage, path, pragmas=_pragmas(document, path))
+        raise _bad(source, "expected a mapping of options")
+    return document
 
 
-def _bad(path: str, text: str) -> RostoolError:
-    return RostoolError(f"--storage-config-file {path}: {text}")
+def _bad(source: str, text: str) -> RostoolError:
+    return RostoolError(f"{source}: {text}")
 
 
 def _mcap_options(document: dict[Any, Any], path: str) -> dict[str, Any]:

@@ -12,7 +12,7 @@ from rostool.commands.bag._options import topic_list
 from rostool.errors import RostoolError
 from rostool.graph.qos import QosRequest
 
-UNSUPPORTED = ("static_topics_path", "storage_preset_profile")
+UNSUPPORTED = ("static_topics_path",)
 
 
 @dataclass(frozen=True)

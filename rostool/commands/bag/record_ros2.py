@@ -109,7 +109,9 @@ RECORD_LISTS = (
 @click.option("--ignore-leaf-topics", is_flag=True,
               help="Leave out discovered topics no one subscribes to (until someone does).")  # fmt: skip
 @click.option("--static-topics-path", metavar="FILE", help="Not supported yet (refused in one line).")
-@click.option("--storage-preset-profile", metavar="PROFILE", help="Not supported yet (refused in one line).")
+@click.option("--storage-preset-profile", metavar="PROFILE",
+              help="rosbag2's storage presets: fastwrite, zstd_fast, zstd_small (mcap); resilient "
+                   "(sqlite3).")  # fmt: skip
 @click.option("--storage-config-file", type=click.Path(exists=True, dir_okay=False), metavar="FILE",
               help="YAML options of the storage: mcap writer options (chunkSize, compression, ...) or "
                    "sqlite3 pragmas (write: {pragmas: [...]}).")  # fmt: skip
@@ -170,13 +172,14 @@ def record(ctx: click.Context, flags: RecordFlags) -> None:
     elif flags.max_bag_size or flags.max_bag_duration or flags.compression_mode != "none":
         raise RostoolError(f"{output}: one file cannot be split or compressed; give a directory name instead")
     storage_config = None
-    if flags.storage_config_file:
+    if flags.storage_config_file or flags.storage_preset_profile:
         from rostool.bag.storage_config import load_storage_config
 
         if suffix == ".bag":
-            raise RostoolError("--storage-config-file configures mcap and sqlite3 storage, not a ROS 1 .bag")
+            raise RostoolError("--storage-config-file and --storage-preset-profile configure mcap and "
+                               "sqlite3 storage, not a ROS 1 .bag")  # fmt: skip
         storage = {".db3": "sqlite3", ".mcap": "mcap"}.get(suffix, flags.storage)
-        storage_config = load_storage_config(flags.storage_config_file, storage)
+        storage_config = load_storage_config(flags.storage_config_file, storage, flags.storage_preset_profile)
         if layout is not None:
             layout.storage_config = storage_config
     overrides = qos_overrides(flags.qos_profile_overrides_path)
