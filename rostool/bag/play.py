@@ -16,8 +16,10 @@ As rosbag does: --prefix is prepended to each bag topic before remapping (`-p /p
 SEC to the next message; --pause-topics (bag topic names) pauses before publishing a message on one of
 them, until space ('t' toggles this). With --immediate, neither skips nor pauses apply.
 
-Timing: see `schedule.py` (absolute due times, no drift). The playback origin is the first message played
-(after -s), as rosbag's view begins at its first message: a pass never starts with a dead wait.
+Pause, rate, next message, burst, seek and stop are `play_controls.PlayControls`' (keys and rosbag2's
+control services alike). Timing: see `schedule.py` (absolute due times, no drift). The playback origin is
+the first message played (after -s), as rosbag's view begins at its first message: a pass never starts
+with a dead wait.
 """
 
 from __future__ import annotations
@@ -32,6 +34,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 from rosbags.interfaces import Connection, ConnectionExtRosbag1, ConnectionExtRosbag2
 
 from rostool.bag.play_console import Console, split_keys
+from rostool.bag.play_controls import Burst, PlayControls
 from rostool.bag.reader import BagReader
 from rostool.bag.schedule import PlayClock, sleep_until
 from rostool.errors import RostoolError
@@ -40,7 +43,7 @@ from rostool.interfaces.names import to_ros1_name
 from rostool.interfaces.ros1 import Ros1Type, builtin_store
 
 if TYPE_CHECKING:
-    from rostool.bag.player_services import Command, Controls
+    from rostool.bag.player_services import Controls
 
 _CLOCK = struct.Struct("<II")
 # rosbag2's key help, as `ros2 bag play` logs it ('s' and 't' work too)
@@ -113,29 +116,6 @@ class _Plan:
     clock: bool = False  # publish this message's time on /clock (ros2 bag play --clock-topics)
 
 
-@dataclass
-class _Burst:
-    """Messages to publish at once while paused (the right arrow: one; rosbag2's burst and play_next)."""
-
-    left: int | None  # None: the rest of the bag
-    command: Command | None = None  # the service request to answer when done
-    done: int = 0
-
-    def sent(self) -> bool:
-        """One more was published; True when that was the last."""
-        self.done += 1
-        if self.left is not None:
-            self.left -= 1
-        return self.left == 0
-
-    def reply(self) -> None:
-        if self.command is not None:
-            if self.command.name == "play_next":
-                self.command.reply(success=self.done > 0)
-            else:
-                self.command.reply(actually_burst=self.done)
-
-
 def parse_remaps(values: Collection[str]) -> dict[str, str]:
     """`/from:=/to` pairs (rosbag and ROS remapping syntax); the player resolves the names."""
     remaps = {}
@@ -147,7 +127,7 @@ def parse_remaps(values: Collection[str]) -> dict[str, str]:
     return remaps
 
 
-class Player:
+class Player(PlayControls):
     graph_name = "ROS 1"  # in messages about what cannot be played
     clock_per_message = True  # /clock also carries every played message's stamp, besides the --hz ticks
 
@@ -172,10 +152,10 @@ class Player:
         self._clock_pub: RawPublisher | None = None
         self._next_tick = 0.0
         self._next_ui = 0.0
-        self._burst: _Burst | None = None
-        self._seek_to: int | None = None  # bag time to continue from (rosbag2's seek)
-        self._stopping = False  # rosbag2's stop: end playing
-        self.controls: Controls | None = None  # rosbag2's control services (play_ros2)
+        self._burst: Burst | None = None
+        self._seek_to: int | None = None
+        self._stopping = False
+        self.controls: Controls | None = None
         self._started = False
         self.total = (reader.end_ns - reader.start_ns) / 1e9 if reader.message_count else 0.0
         self.window = self._window()
@@ -307,9 +287,9 @@ class Player:
         if not self._plans:
             return self.result
         try:
-            self._pause_before_start()
             if self.options.pause:
                 self.clock.pause(time.perf_counter())
+            self._pause_before_start()
             while not self._stopping:
                 published = self._play_once()
                 self.result.loops += 1
@@ -324,19 +304,6 @@ class Player:
             self.close_controls()
         return self.result
 
-    @property
-    def serves_controls(self) -> bool:
-        """Whether control services (resume, ...) are served: playing can then resume without keys."""
-        return False
-
-    def close_controls(self) -> None:
-        """Answer what the services still ask: playing has ended."""
-        if self._burst is not None:
-            self._burst.reply()
-            self._burst = None
-        if self.controls is not None:
-            self.controls.close()
-
     def _pause_before_start(self) -> None:
         options = self.options
         if options.delay > 0:
@@ -346,7 +313,7 @@ class Player:
             self.console.say("Waiting for a subscriber on every topic...")
             for publisher, _md5 in self._publishers.values():
                 while not publisher.wait_for_subscribers(1, 0.1):
-                    pass
+                    self._commands(time.perf_counter())
         if not self.console.keyboard:
             self.console.say("")
         elif self.console.form == "ros2 bag":
@@ -476,53 +443,16 @@ class Player:
                 else:
                     self.clock.pause(now)
             elif key in ("s", "RIGHT") and self.clock.paused and self._burst is None:
-                self._burst = _Burst(1)
+                self._burst = Burst(1)
             elif key == "t":
                 self._pause_for_topics = not self._pause_for_topics
             elif key in ("UP", "DOWN"):  # rosbag2's 10 % a press
                 self.clock.set_rate(self.clock.rate * (1.1 if key == "UP" else 0.9), now)
                 if console.form == "ros2 bag":
                     console.say(f"[INFO] [rosbag2_player]: Set rate to {self.clock.rate:g}")
-        if self.controls is not None:
-            for command in self.controls.pending():
-                self._command(command, now)
+        self._commands(now)
         if console.show_status:
             bag_ns = self.clock.bag_time(now) if self._started else self.window[0]
             state = "PAUSED " if self.clock.paused else "RUNNING"
             elapsed = (bag_ns - self.reader.start_ns) / 1e9
             console.status(state, bag_ns / 1e9, elapsed, self.total, self.clock.rate)
-
-    def _command(self, command: Command, now: float) -> None:
-        """A request of rosbag2's control services (player_services.py), done as the keys do it."""
-        clock, name, value = self.clock, command.name, command.value
-        if name in ("pause", "resume", "toggle_paused"):
-            if name == "pause" or (name == "toggle_paused" and not clock.paused):
-                clock.pause(now)
-            else:
-                clock.resume(now)
-            command.reply()
-        elif name == "is_paused":
-            command.reply(paused=clock.paused)
-        elif name == "get_rate":
-            command.reply(rate=clock.rate)
-        elif name == "set_rate":
-            if value > 0:
-                clock.set_rate(value, now)
-            command.reply(success=value > 0)
-        elif name in ("play_next", "burst"):
-            if not clock.paused or self._burst is not None:  # rosbag2: only while paused
-                self.warn(f"{name} is done only while paused")
-                command.reply(**({"success": False} if name == "play_next" else {"actually_burst": 0}))
-            else:
-                self._burst = _Burst(1 if name == "play_next" else value or None, command)
-        elif name == "seek":
-            start, end = self.window
-            last = self.reader.end_ns if end is None else end
-            if value > last:
-                command.reply(success=False)
-            else:
-                self._seek_to = max(value, start)
-                command.reply(success=True)
-        elif name == "stop":
-            self._stopping = True
-            command.reply()
