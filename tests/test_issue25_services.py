@@ -168,19 +168,20 @@ def test_rclpy_backend_serves_a_service_the_real_ros2_calls(
 def test_recorder_snapshot_service_writes_the_held_second(
     graph_env: dict[str, str], start_peer: Start, tmp_path: Path
 ) -> None:
-    """`bag record --snapshot-mode` serves /rosbag2_recorder/snapshot: the call answers once the messages
-    held (the last second) are written; what comes after it is never written."""
+    """`bag record --snapshot-mode` serves NODE/snapshot (rosbag2's /rosbag2_recorder/snapshot; --node-name
+    renames it): the call answers once the messages held (the last second) are written; what comes after
+    it is never written."""
     from rosbags.highlevel import AnyReader
 
     talker = start_peer("--name", "talker", "--talk", "/chatter", "--rate", "20")
     bag = tmp_path / "snap"
     args = ["--ros2", "bag", "record", "/chatter", "-o", str(bag), "--snapshot-mode",
-            "--max-cache-duration", "1"]  # fmt: skip
+            "--max-cache-duration", "1", "--node-name", "snapper"]  # fmt: skip
     recorder = Watched(rostool_popen(args, graph_env, stdin=subprocess.DEVNULL))
     try:
         matched = int(talker.wait_for("matched", lambda e: e["subscribers"] >= 1, timeout=30)["count"])
         talker.wait_for("published", lambda e: e["count"] > matched + 40, timeout=30)
-        done = rostool(["--ros2", "service", "call", "/rosbag2_recorder/snapshot",
+        done = rostool(["--ros2", "service", "call", "/snapper/snapshot",
                         "rosbag2_interfaces/srv/Snapshot"], graph_env, timeout=60)  # fmt: skip
         assert done.returncode == 0, done.stderr
         assert done.stdout.rstrip().endswith("Snapshot_Response(success=True)"), done.stdout

@@ -21,8 +21,7 @@ from typing import Any
 from rostool.errors import RostoolError
 from rostool.graph.base import Graph, ServedService
 
-PLAYER_NODE = "/rosbag2_player"  # rosbag2's node names: its services are under them
-RECORDER_NODE = "/rosbag2_recorder"
+PLAYER_NODE = "/rosbag2_player"  # rosbag2's player node: its services are under it
 _TYPES = "rosbag2_interfaces/srv/"
 
 
@@ -136,6 +135,7 @@ def serve_player(graph: Graph, controls: Controls, warn: Callable[[str], None]) 
     return serve(graph, PLAYER_NODE, handlers, warn)
 
 
-def serve_snapshot(graph: Graph, take: Callable[[], bool], warn: Callable[[str], None]) -> Served:
-    """`/rosbag2_recorder/snapshot`: `take()` writes the snapshot and says whether it was written."""
-    return serve(graph, RECORDER_NODE, {"snapshot": ("Snapshot", lambda _request: {"success": take()})}, warn)
+def serve_snapshot(graph: Graph, node: str, take: Callable[[], bool], warn: Callable[[str], None]) -> Served:
+    """NODE/snapshot (rosbag2's recorder: `/rosbag2_recorder/snapshot`): `take()` writes the snapshot and
+    says whether it was written."""
+    return serve(graph, node, {"snapshot": ("Snapshot", lambda _request: {"success": take()})}, warn)

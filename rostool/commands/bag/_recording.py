@@ -36,6 +36,7 @@ class RecordRequest:
     no_discovery: bool = False  # only the topics present at the start
     keyboard: bool = True  # space pauses and resumes when stdin is a terminal
     progress_every: float = 10.0  # seconds between progress lines when stderr is not a terminal (0: none)
+    node_name: str = "rosbag2_recorder"  # ros2 bag record --node-name: its services are under it
 
 
 def run_record(ctx: click.Context, request: RecordRequest) -> None:
@@ -94,7 +95,8 @@ def run_record(ctx: click.Context, request: RecordRequest) -> None:
         take = snapshot if options.snapshot else None
         served = Served()
         if take is not None and graph.encoding == "cdr":  # rosbag2's ~/snapshot service too
-            served = serve_snapshot(graph, lambda: snapshot().wait(SNAPSHOT_WAIT), warn)
+            node = graph.resolve(request.node_name)
+            served = serve_snapshot(graph, node, lambda: snapshot().wait(SNAPSHOT_WAIT), warn)
         with (
             contextlib.closing(served),
             stop_on_signals(stop),

@@ -80,7 +80,8 @@ RECORD_LISTS = (
 @click.option("--use-sim-time", is_flag=True,
               help="Stamp messages with /clock's time; none is written before the first.")  # fmt: skip
 @click.option(
-    "--node-name", default="rosbag2_recorder", show_default=True, help="Accepted for ros2 bag's sake."
+    "--node-name", default="rosbag2_recorder", show_default=True,
+    help="The recorder's node name: --snapshot-mode serves NAME/snapshot.",
 )
 @click.option(
     "--custom-data", multiple=True, metavar="KEY=VALUE...", help="Store KEY=VALUE in metadata.yaml."
@@ -213,5 +214,6 @@ def record(ctx: click.Context, flags: RecordFlags) -> None:
         no_discovery=flags.no_discovery,
         keyboard=not flags.disable_keyboard_controls,
         progress_every=flags.progress,
+        node_name=flags.node_name,
     )
     run_record(ctx, request)
