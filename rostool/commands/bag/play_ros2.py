@@ -110,7 +110,8 @@ PLAY_LISTS = (
 @click.option("--playback-until-nsec", type=int, metavar="T",
               help="Play until bag time T (nanoseconds since the epoch).")  # fmt: skip
 @click.option("--disable-keyboard-controls", is_flag=True, help="Read no keys from the terminal.")
-@click.option("-p", "--start-paused", is_flag=True, help="Start paused (space resumes; needs a terminal).")
+@click.option("-p", "--start-paused", is_flag=True,
+              help="Start paused (space or the /rosbag2_player/resume service resumes).")  # fmt: skip
 @click.option("--start-offset", type=click.FloatRange(min=0), default=0.0, metavar="S",
               help="Start S seconds into the bag.")  # fmt: skip
 @click.option("--wait-for-all-acked", type=click.IntRange(min=-1), default=-1, metavar="MS", help="Accepted.")
@@ -140,7 +141,9 @@ def play(ctx: click.Context, flags: PlayFlags) -> None:
     BAG is a rosbag2 directory, an .mcap or .db3 file (or a ROS 1 .bag, converted as `bag convert`
     does). The CDR bytes are published unchanged with the bag's types and recorded durability.
     On a terminal, as in rosbag2: space pauses/resumes, the right arrow (or 's') plays the next message
-    while paused, up/down raise/lower the rate by 10 %.
+    while paused, up/down raise/lower the rate by 10 %. rosbag2's control services are served while
+    playing: /rosbag2_player/pause, resume, toggle_paused, is_paused, get_rate, set_rate, play_next,
+    burst, seek and stop (rosbag2_interfaces' types; `-p` can then be resumed without a terminal).
 
     \b
     Examples:
@@ -148,6 +151,7 @@ def play(ctx: click.Context, flags: PlayFlags) -> None:
       rostool --ros2 bag play run/ --topics /chatter /odom -r 2 --start-offset 5
       rostool --ros2 bag play run/ --clock 100 -l
       rostool --ros2 bag play talker.mcap --remap /chatter:=/talk --playback-duration 3
+      rostool --ros2 service call /rosbag2_player/set_rate rosbag2_interfaces/srv/SetRate "{rate: 2.0}"
     """
     from rostool.bag.play import PlayOptions, parse_remaps
     from rostool.bag.play_topics import check_storage

@@ -139,6 +139,9 @@ def record(ctx: click.Context, flags: RecordFlags) -> None:
       rostool --ros2 bag record /chatter -o chatter.mcap  # one .mcap file, no directory
       rostool --ros2 bag record -a --start-paused         # SPACE starts recording
       rostool --ros2 bag record -a --max-rate /points:5   # at most 5 point clouds a second
+      rostool --ros2 bag record -a --storage-preset-profile zstd_fast
+      rostool --ros2 bag record -a --storage-config-file mcap_writer_options.yaml
+      rostool --ros2 bag record -a --snapshot-mode        # then: service call /rosbag2_recorder/snapshot
     """
     from rostool.bag.qos_overrides import qos_overrides
     from rostool.bag.record_options import RecordOptions, parse_max_rates
