@@ -13,6 +13,7 @@ from pathlib import Path
 
 import pytest
 
+from rostool.bag.player_services import PLAYER_SERVICES
 from tests.ros2_peers import PEERS_DIR, RclpyPeer, peer_env, peer_python, rostool_rclpy_popen
 from tests.support import Watched, rostool, rostool_popen
 
@@ -94,6 +95,11 @@ def test_player_services_pause_resume_and_stop(
                                  stdin=subprocess.DEVNULL))  # fmt: skip
     try:
         assert listener.wait_for("heard", lambda e: e["data"] == "n 2", timeout=30)
+        ros2 = PEERS_DIR / "jazzy" / "bin" / "ros2"  # the real ros2 lists them with their types
+        listed = subprocess.run([str(ros2), "service", "list", "-t", "--no-daemon"], capture_output=True,
+                                env=peer_env(graph_env, tmp_path), text=True, timeout=60)  # fmt: skip
+        for name, (kind, _value) in PLAYER_SERVICES.items():
+            assert f"/rosbag2_player/{name} [rosbag2_interfaces/srv/{kind}]" in listed.stdout, listed.stdout
         call(graph_env, "pause", "Pause")
         assert call(graph_env, "is_paused", "IsPaused").endswith("(paused=True)")
         before = heard(listener)
