@@ -86,10 +86,13 @@ class DaemonGraph:
         return self.direct.types
 
     def _daemon_distro(self) -> str | None:
+        """The distro the daemon decodes with (its key makes it this process's); None when it does not
+        answer (as any query: a daemon is started, or bypassed with a warning)."""
         try:
-            return str(self._client.query("type_distro", []))
-        except (DaemonAbsent, DaemonSilent, OtherBuild, RostoolError):
-            return None  # the queries that follow say why, and answer directly
+            found = self._served(lambda: str(self._client.query("type_distro", [])), lambda: None)
+        except RostoolError:
+            return None
+        return found if isinstance(found, str) else None
 
     def use_qos(self, qos: QosRequest) -> None:
         self._qos = qos
