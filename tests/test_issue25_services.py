@@ -6,6 +6,7 @@ without them after one warning; its service server is checked with the real `ros
 
 from __future__ import annotations
 
+import itertools
 import re
 import subprocess
 from collections.abc import Callable
@@ -206,6 +207,46 @@ def test_recorder_snapshot_service_writes_the_held_second(
     assert rows[-1][0] - rows[0][0] <= 1_000_000_000, rows  # the last second only
     # held before the call: nothing of the second (and more) published after it
     assert numbers[0] > matched and numbers[-1] < later - 15, (matched, later, numbers)
+
+
+@pytest.mark.parametrize("distro", ["jazzy"], indirect=True)
+def test_recorder_pause_resume_and_is_paused_services(
+    graph_env: dict[str, str], start_peer: Start, tmp_path: Path
+) -> None:
+    """/rosbag2_recorder/pause, resume and is_paused: what arrives while paused is not recorded."""
+    from rosbags.highlevel import AnyReader
+
+    talker = start_peer("--name", "talker", "--talk", "/chatter", "--rate", "20")
+    bag = tmp_path / "paused"
+    recorder = Watched(rostool_popen(["--ros2", "bag", "record", "/chatter", "-o", str(bag)], graph_env,
+                                     stdin=subprocess.DEVNULL))  # fmt: skip
+
+    def recorder_call(service: str, kind: str) -> str:
+        done = rostool(["--ros2", "service", "call", f"/rosbag2_recorder/{service}",
+                        f"rosbag2_interfaces/srv/{kind}"], graph_env, timeout=60)  # fmt: skip
+        assert done.returncode == 0, done.stderr
+        return done.stdout.rstrip()
+
+    try:
+        matched = int(talker.wait_for("matched", lambda e: e["subscribers"] >= 1, timeout=30)["count"])
+        talker.wait_for("published", lambda e: e["count"] > matched + 20, timeout=30)
+        assert recorder_call("is_paused", "IsPaused").endswith("IsPaused_Response(paused=False)")
+        recorder_call("pause", "Pause")
+        assert recorder_call("is_paused", "IsPaused").endswith("IsPaused_Response(paused=True)")
+        at_pause = talker.of("published")[-1]["count"]
+        talker.wait_for("published", lambda e: e["count"] > at_pause + 60, timeout=30)
+        recorder_call("resume", "Resume")
+        assert recorder_call("is_paused", "IsPaused").endswith("IsPaused_Response(paused=False)")
+        at_resume = talker.of("published")[-1]["count"]
+        talker.wait_for("published", lambda e: e["count"] > at_resume + 40, timeout=30)
+    finally:
+        _out, err = recorder.stop()
+    assert "Pausing recording." in err and "Resuming recording." in err, err
+    with AnyReader([bag]) as reader:
+        numbers = [int(reader.deserialize(data, c.msgtype).data.removeprefix("hello "))
+                   for c, _t, data in reader.messages()]  # fmt: skip
+    gaps = [(a, b) for a, b in itertools.pairwise(numbers) if b != a + 1]
+    assert len(gaps) == 1 and gaps[0][1] - gaps[0][0] > 20, gaps  # one hole: the paused time
 
 
 # --- ros2 bag record --storage-config-file ---------------------------------------------------------------

@@ -1,7 +1,7 @@
 """rosbag2's control services: `bag play` on a ROS 2 graph serves the player's (`/rosbag2_player/pause`,
 `resume`, `toggle_paused`, `is_paused`, `get_rate`, `set_rate`, `play_next`, `burst`, `seek`, `stop`) and
-`bag record --snapshot-mode` the recorder's `/rosbag2_recorder/snapshot`, with rosbag2_interfaces' types
-(built into rostool: interfaces/rosbag2_srv.py).
+`ros2 bag record` the recorder's (`/rosbag2_recorder/pause`, `resume`, `is_paused`, and `snapshot` in
+snapshot mode), with rosbag2_interfaces' types (built into rostool: interfaces/rosbag2_srv.py).
 
 A request arrives on a thread of the transport; `Controls` hands it to the player's loop, which acts on
 it as on a key (play.py `Player._command`) and answers. A service that cannot be served (the rclpy
@@ -135,7 +135,29 @@ def serve_player(graph: Graph, controls: Controls, warn: Callable[[str], None]) 
     return serve(graph, PLAYER_NODE, handlers, warn)
 
 
-def serve_snapshot(graph: Graph, node: str, take: Callable[[], bool], warn: Callable[[str], None]) -> Served:
-    """NODE/snapshot (rosbag2's recorder: `/rosbag2_recorder/snapshot`): `take()` writes the snapshot and
-    says whether it was written."""
-    return serve(graph, node, {"snapshot": ("Snapshot", lambda _request: {"success": take()})}, warn)
+def serve_recorder(
+    graph: Graph,
+    node: str,
+    paused: Callable[[], bool],
+    toggle: Callable[[], None],
+    snapshot: Callable[[], bool] | None,
+    warn: Callable[[str], None],
+) -> Served:
+    """The recorder's NODE/pause, resume and is_paused (rosbag2's `/rosbag2_recorder/...`), and in snapshot
+    mode NODE/snapshot: `snapshot()` writes the snapshot and says whether it was written."""
+    lock = threading.Lock()
+
+    def set_paused(wanted: bool) -> dict[str, Any]:
+        with lock:
+            if paused() != wanted:
+                toggle()
+        return {}
+
+    handlers: dict[str, tuple[str, Callable[[Any], Mapping[str, Any]]]] = {
+        "pause": ("Pause", lambda _request: set_paused(True)),
+        "resume": ("Resume", lambda _request: set_paused(False)),
+        "is_paused": ("IsPaused", lambda _request: {"paused": paused()}),
+    }
+    if snapshot is not None:
+        handlers["snapshot"] = ("Snapshot", lambda _request: {"success": snapshot()})
+    return serve(graph, node, handlers, warn)

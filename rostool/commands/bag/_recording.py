@@ -40,7 +40,7 @@ class RecordRequest:
 
 
 def run_record(ctx: click.Context, request: RecordRequest) -> None:
-    from rostool.bag.player_services import Served, serve_snapshot
+    from rostool.bag.player_services import Served, serve_recorder
     from rostool.bag.record import Recorder, stop_on_signals
     from rostool.commands._common import live_graph
     from rostool.commands.bag._record_console import PlainProgress, RecordDashboard, pause_controls
@@ -94,9 +94,11 @@ def run_record(ctx: click.Context, request: RecordRequest) -> None:
 
         take = snapshot if options.snapshot else None
         served = Served()
-        if take is not None and graph.encoding == "cdr":  # rosbag2's ~/snapshot service too
-            node = graph.resolve(request.node_name)
-            served = serve_snapshot(graph, node, lambda: snapshot().wait(SNAPSHOT_WAIT), warn)
+        if ros2_form and graph.encoding == "cdr":  # rosbag2's recorder services
+            served = serve_recorder(
+                graph, graph.resolve(request.node_name), lambda: recorder.paused, toggle,
+                (lambda: snapshot().wait(SNAPSHOT_WAIT)) if take is not None else None, warn,
+            )  # fmt: skip
         with (
             contextlib.closing(served),
             stop_on_signals(stop),
