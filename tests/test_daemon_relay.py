@@ -9,14 +9,17 @@ from __future__ import annotations
 import json
 import re
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 import pytest
 
 from tests.ros2_backends import Tool, ToolPopen
 from tests.ros2_peers import RclpyPeer, bound_addresses
-from tests.support import Watched, wait_until
+from tests.support import Watched, interface_workspace, rostool, rostool_popen, stop, wait_until
 from tests.test_daemon import graph_env  # noqa: F401 (the fixture: the daemon allowed, its own directory)
+from tests.test_ros2_interfaces import SOURCES
+from tests.test_ros2_type_description import EXPECTED_STATUS, STATUS
 
 DAEMON_NODE = "/_rostool_daemon_"  # and its pid
 # how a Kilted (Fast DDS 3) node may name a Cyclone participant's endpoints (issue 21): the count still holds
@@ -142,3 +145,40 @@ def test_a_relay_outlives_its_daemon(
         _out, err = echo.stop()
     warnings = [line for line in err.splitlines() if "graph daemon stopped relaying /t" in line]
     assert len(warnings) == 1, err
+
+
+@pytest.mark.parametrize("distro", ["jazzy"])
+def test_a_qos_no_publisher_serves_fails_as_directly(
+    tool: Tool, start_peer: Callable[..., RclpyPeer], graph_env: dict[str, str]  # noqa: F811
+) -> None:
+    start_peer("--name", "talker", "--talk", "/t", "--rate", "20", "--best-effort")
+    started_daemon(tool)
+    args = ["topic", "echo", "/t", "--once", "--qos-reliability", "reliable", "--timeout", "20"]
+    served, direct = tool(args), tool([*args, "--no-daemon"])
+    for done in (served, direct):
+        lines = done.stderr_lines  # type: ignore[attr-defined]
+        assert done.returncode == 1 and len(lines) == 1 and done.stdout == "", done.stderr
+        assert "incompatible policy" in lines[0] and "adjust --qos-reliability" in lines[0]
+    assert served.stderr_lines == direct.stderr_lines  # type: ignore[attr-defined]
+
+
+def test_a_type_only_the_publisher_knows_comes_with_the_relay(
+    graph_env: dict[str, str], tmp_path: Path  # noqa: F811
+) -> None:
+    sources = interface_workspace(tmp_path / "ws", SOURCES)
+    args = ["topic", "pub", "/status", "robo_msgs/msg/Status", STATUS, "-r", "10", "--interfaces"]
+    publisher = rostool_popen([*args, str(sources)], {**graph_env, "ROSTOOL_NO_DAEMON": "1"})
+    try:
+        done = rostool(["daemon", "start"], graph_env, timeout=60)
+        assert done.returncode == 0, done.stderr
+        # neither this process (no sources) nor the DDS daemon knows the type: the daemon learns it from
+        # the publisher's node, this process from the daemon's relay
+        echoed = rostool(["topic", "echo", "/status", "-n", "2", "--json"], graph_env, cwd=tmp_path)
+        assert echoed.returncode == 0 and echoed.stderr == "", echoed.stderr
+        assert [json.loads(line) for line in echoed.stdout.splitlines()] == [EXPECTED_STATUS] * 2
+        yaml = rostool(["topic", "echo", "/status", "-n", "1", "--field", "parts"], graph_env, cwd=tmp_path)
+        assert "label: leg" in yaml.stdout and "weight: 0.5" in yaml.stdout, yaml.stderr
+        status = json.loads(rostool(["daemon", "status", "--json"], graph_env).stdout)
+        assert Path(status["log"]).read_text().count("relaying /status") == 2
+    finally:
+        stop(publisher)
