@@ -82,7 +82,7 @@ def test_player_services_pause_step_burst_rate_seek_and_resume(
     finally:
         _out, err = play.stop()
     assert heard(listener) == [0, 1, 2, 3, *range(20, 60)], err
-    assert "services are not served" not in err
+    assert "services are not served" not in err and "Traceback" not in err, err
 
 
 @pytest.mark.parametrize("distro", ["jazzy"], indirect=True)
@@ -116,7 +116,7 @@ def test_player_services_pause_resume_and_stop(
         _out, err = play.stop()
     played = heard(listener)
     assert played == list(range(len(played))) and len(played) < 600, played
-    assert "burst is done only while paused" in err
+    assert "burst is done only while paused" in err and "Traceback" not in err, err
 
 
 def test_rclpy_backend_plays_without_the_services_it_cannot_type(
@@ -196,7 +196,7 @@ def test_recorder_snapshot_service_writes_the_held_second(
         later = int(talker.wait_for("published", lambda e: e["count"] > answered + 40, timeout=30)["count"])
     finally:
         _out, err = recorder.stop()
-    assert "Taking a snapshot." in err, err
+    assert "Taking a snapshot." in err and "Traceback" not in err, err
     with AnyReader([bag]) as reader:
         rows = [
             (stamp, int(reader.deserialize(data, conn.msgtype).data.removeprefix("hello ")))
@@ -241,7 +241,7 @@ def test_recorder_pause_resume_and_is_paused_services(
         talker.wait_for("published", lambda e: e["count"] > at_resume + 40, timeout=30)
     finally:
         _out, err = recorder.stop()
-    assert "Pausing recording." in err and "Resuming recording." in err, err
+    assert "Pausing recording." in err and "Resuming recording." in err and "Traceback" not in err, err
     with AnyReader([bag]) as reader:
         numbers = [int(reader.deserialize(data, c.msgtype).data.removeprefix("hello "))
                    for c, _t, data in reader.messages()]  # fmt: skip

@@ -248,6 +248,8 @@ class ServiceServer:
             time.sleep(0.005)
 
     def close(self) -> None:
+        if self._closed.is_set():  # closed by its owner and again by the graph's close
+            return
         self._closed.set()
         self._waitset.wakeup.set(True)
         self._thread.join(2.0)

@@ -71,6 +71,7 @@ class Ros2Base:
         self._node_name = f"{base}_{os.getpid()}" if anonymous else base
         self._lock = threading.Lock()
         self._subscriptions: list[Subscription] = []
+        self._served: list[ServedService] = []  # serve_service's, ended before the transport
         self.require_peers = True  # False: an empty graph lists nothing instead of failing (the daemon)
         self.interface_paths = tuple(interface_paths)
         self._prepare(distro)
@@ -181,6 +182,9 @@ class Ros2Base:
         for sub in self._subscriptions:
             sub.close()
         self._subscriptions.clear()
+        for served in self._served:
+            served.close()
+        self._served.clear()
         self._close_transport()
 
     def resolve(self, name: str) -> str:
@@ -335,7 +339,9 @@ class Ros2Base:
             return build_message(types.store, response_type, types.with_defaults(response_type, fields))
 
         self._start()
-        return self._service_server(resolve(name), srv_type, answer)
+        served = self._service_server(resolve(name), srv_type, answer)
+        self._served.append(served)
+        return served
 
     def service_uri(self, name: str) -> str:
         raise ros1_only("service uri")
