@@ -7,7 +7,11 @@ real `ros2` (with its own warm daemon), in one run (issue 21):
   with the mcap library (target >= 29); beside it `topic echo /t` for 3 s, rostool's and ros2's, counted.
 
     .venv/bin/python bench/bench_startup.py [--distro jazzy|kilted] [--runs 5] [--backend dds|rclpy]...
-        [--daemon]
+        [--daemon] [--what echo|pub|record|phases|linger|call|relays]...
+
+With --daemon, `topic echo` (and hz, bw) read through the daemon's relay: its reader in the warm graph, the
+messages streamed over the Unix socket; `relays` runs 10x --runs relayed echoes and shows the daemon's
+memory and threads before and after.
 
 Each call is a new process, as a user's shell runs it; the tools alternate, so a drift of the machine's
 speed touches all of them. Without --daemon rostool asks the graph directly (ROSTOOL_NO_DAEMON=1); with it,
@@ -24,6 +28,7 @@ import subprocess
 import tempfile
 import time
 from pathlib import Path
+from typing import Any
 
 from _graph import VENV_PYTHON, ros2_env, tear_down_ros2
 
@@ -81,7 +86,7 @@ def main() -> None:
     parser.add_argument("--backend", action="append", choices=("dds", "rclpy"))
     parser.add_argument("--daemon", action="store_true", help="rostool through its warm graph daemon")
     parser.add_argument(
-        "--what", action="append", choices=("echo", "pub", "record", "phases", "linger", "call")
+        "--what", action="append", choices=("echo", "pub", "record", "phases", "linger", "call", "relays")
     )
     args = parser.parse_args()
     backends = args.backend or ["dds", "rclpy"]
@@ -142,6 +147,8 @@ def main() -> None:
             bench_phases(tools, args.runs)
         if "call" in what:
             bench_calls(tools, args.runs, listener)
+        if "relays" in what and args.daemon:
+            bench_relays(tools, args.runs * 10)
         if "linger" in what:
             bench_linger(args.distro, env, scratch, args.runs)
     finally:
@@ -158,6 +165,33 @@ def bench_echo(tools: list[Tool], runs: int) -> None:
             good[label] += code == 0 and "data: hello" in out
     for label, values in times.items():
         print(row(f"{label} topic echo /t --once", values, extra=f"{good[label]}/{runs} printed a message"))
+
+
+def bench_relays(tools: list[Tool], count: int) -> None:
+    """`count` relayed `topic echo --once` one after the other: the daemon's memory and threads before and
+    after (a relay's reader, threads and queue must all go with its verb), and its relays left open."""
+    for label, command, env in tools:
+        if not label.startswith("rostool"):
+            continue
+        first = _daemon(command, env)
+        good = sum(timed([*command, "topic", "echo", "/t", "--once"], env)[2] == 0 for _ in range(count))
+        last = _daemon(command, env)
+        same = "same daemon" if first["pid"] == last["pid"] else "REPLACED (another build): not comparable"
+        print(f"| {label}: {count} relayed echo --once | RSS {first['VmRSS']} -> {last['VmRSS']} | threads "
+              f"{first['Threads']} -> {last['Threads']} | relays left {len(last['relays'])}, {same} | "
+              f"{good}/{count} ok |")
+
+
+def _daemon(command: list[str], env: dict[str, str]) -> dict[str, Any]:
+    """The daemon's status with its process's VmRSS and Threads."""
+    import json
+
+    done = subprocess.run([*command, "daemon", "status", "--json"], env=env, capture_output=True, text=True,
+                          timeout=30)  # fmt: skip
+    status: dict[str, Any] = json.loads(done.stdout)
+    lines = Path(f"/proc/{status['pid']}/status").read_text().splitlines()
+    status.update({key: value.strip() for key, _, value in (line.partition(":") for line in lines)})
+    return status
 
 
 def bench_pub(tools: list[Tool], runs: int, listener: RclpyPeer) -> None:

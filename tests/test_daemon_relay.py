@@ -14,7 +14,7 @@ from typing import Any
 
 import pytest
 
-from tests.ros2_backends import Tool, ToolPopen
+from tests.ros2_backends import Tool, ToolPopen, rostool_lines
 from tests.ros2_peers import RclpyPeer, bound_addresses
 from tests.support import Watched, interface_workspace, rostool, rostool_popen, stop, wait_until
 from tests.test_daemon import graph_env  # noqa: F401 (the fixture: the daemon allowed, its own directory)
@@ -118,6 +118,7 @@ def test_two_verbs_at_once_each_get_their_messages(
     started_daemon(tool)
     first = Watched(tool_popen(["topic", "echo", "/t", "-n", "5"]))
     second = Watched(tool_popen(["topic", "echo", "/u", "-n", "5", "--qos-reliability", "best_effort"]))
+    third = Watched(tool_popen(["topic", "echo", "/t"]))  # ended with Ctrl+C
     outs: list[Any] = []
     for echo in (first, second):
         assert echo.proc.wait(timeout=30) == 0
@@ -125,6 +126,9 @@ def test_two_verbs_at_once_each_get_their_messages(
     for out, err in outs:
         got = numbers(out)
         assert len(got) == 5 and got == list(range(got[0], got[0] + 5)), (out, err)
+    assert third.wait_for(lambda out: len(numbers(out)) >= 5), third.stop()
+    _out, err = third.stop()
+    assert third.proc.returncode == 130 and rostool_lines(err) == [], err
     assert wait_until(lambda: relays(tool) == [], timeout=10)
 
 
