@@ -97,7 +97,8 @@ def run_record(ctx: click.Context, request: RecordRequest) -> None:
         if ros2_form and graph.encoding == "cdr":  # rosbag2's recorder services
             served = serve_recorder(
                 graph, graph.resolve(request.node_name), lambda: recorder.paused, toggle,
-                (lambda: snapshot().wait(SNAPSHOT_WAIT)) if take is not None else None, warn,
+                (lambda: snapshot().wait(SNAPSHOT_WAIT)) if take is not None else None,
+                warn if take is not None else lambda _text: None,  # said only where asked for (snapshots)
             )  # fmt: skip
         with (
             contextlib.closing(served),
