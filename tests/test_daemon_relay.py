@@ -16,11 +16,12 @@ import pytest
 
 from tests.ros2_backends import Tool, ToolPopen, rostool_lines
 from tests.ros2_peers import RclpyPeer, bound_addresses
-from tests.support import Watched, interface_workspace, rostool, rostool_popen, stop, wait_until
+from tests.support import TESTDATA, Watched, interface_workspace, rostool, rostool_popen, stop, wait_until
 from tests.test_daemon import graph_env  # noqa: F401 (the fixture: the daemon allowed, its own directory)
 from tests.test_ros2_interfaces import SOURCES
 from tests.test_ros2_type_description import EXPECTED_STATUS, STATUS
 
+ROS2_BAGS = TESTDATA / "ros2"
 DAEMON_NODE = "/_rostool_daemon_"  # and its pid
 # how a Kilted (Fast DDS 3) node may name a Cyclone participant's endpoints (issue 21): the count still holds
 BARE = "_CREATED_BY_BARE_DDS_APP_"
@@ -186,3 +187,19 @@ def test_a_type_only_the_publisher_knows_comes_with_the_relay(
         assert Path(status["log"]).read_text().count("relaying /status") == 2
     finally:
         stop(publisher)
+
+
+@pytest.mark.parametrize("distro", ["jazzy"])
+def test_bag_play_through_a_serving_daemon_publishes_the_bags_types(
+    start_peer: Callable[..., RclpyPeer], graph_env: dict[str, str]  # noqa: F811
+) -> None:
+    # the verb's types are made before its direct graph (which only publishing needs): what play
+    # registers in them must reach the graph that publishes
+    listener = start_peer("--name", "listener", "--listen", "/talk")
+    assert rostool(["daemon", "start"], graph_env, timeout=60).returncode == 0
+    play = ["--ros2", "bag", "play", str(ROS2_BAGS / "talker_mcap"), "--topics", "/topic",
+            "--remap", "/topic:=/talk", "-r", "2", "-d", "1"]  # fmt: skip
+    played = rostool(play, graph_env, timeout=60)
+    assert played.returncode == 0, played.stderr
+    assert wait_until(lambda: len(listener.of("heard")) >= 10, timeout=10)
+    assert [e["data"] for e in listener.of("heard")] == [f"Hello, world! {i}" for i in range(10)]
