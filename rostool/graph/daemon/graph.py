@@ -1,5 +1,8 @@
-"""`DaemonGraph`: the Graph protocol with its read-only queries answered by the user's graph daemon, and
-everything else (echo, pub, call, record, goals, parameters, types) by a direct backend made on first need.
+"""`DaemonGraph`: the Graph protocol with its read-only queries answered by the user's graph daemon, its
+subscriptions relayed by it (echo, hz, bw, plot), and everything else (pub, call, record, goals,
+parameters) by a direct backend made on first need. `bag record` stays direct: its source follows
+discovery itself (-a, --regex), holds its --duration clock on its readers' matched counts and reads the
+publishers' QoS for the bag's metadata, none of which a stream of messages carries.
 
 When no daemon answers, the query is answered directly (complete, as without a daemon) and a daemon is
 started detached for the next calls; a daemon that takes the connection but does not answer in time is

@@ -1,7 +1,7 @@
 """The Graph protocol's read-only queries the daemon answers, and how their typed results travel as JSON.
 
-Every query here only reads the graph; whatever opens endpoints (echo, pub, call, record, goals,
-parameters) stays with a backend in the verb's own process.
+Every query here only reads the graph. Subscriptions are relayed (relay_server.py); whatever else opens
+endpoints (pub, call, record, goals, parameters) stays with a backend in the verb's own process.
 """
 
 from __future__ import annotations
