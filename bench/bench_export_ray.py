@@ -31,7 +31,6 @@ import sys
 import tempfile
 import threading
 import time
-from collections.abc import Iterator
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -81,15 +80,16 @@ def write_bag(path: Path, imu: int, tf: int) -> Path:
 
 
 class Sampler:
-    """Peak RSS (MiB) of the driver and of its largest worker, from /proc every 50 ms."""
+    """Peak RSS (MiB) of the driver and of its largest worker (a local worker process, forked by the
+    forkserver, or a Ray worker, `ray::...`/default_worker.py), from /proc every 50 ms."""
 
-    DAEMONS = ("gcs_server", "raylet", "dashboard", "log_monitor", "monitor.py", "runtime_env", "ray start")
+    WORKERS = ("ray::", "default_worker.py", "multiprocessing.forkserver")
 
     def __init__(self, driver: int, also: int | None) -> None:
         self.roots = {driver} | ({also} if also else set())
         self.driver = driver
         self.peak: dict[int, int] = {}
-        self.kind: dict[int, str] = {}
+        self.workers: set[int] = set()
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, daemon=True)
         self._thread.start()
@@ -111,80 +111,112 @@ class Sampler:
             for pid in tree:
                 with contextlib.suppress(OSError, ValueError):
                     status = Path(f"/proc/{pid}/status").read_text()
-                    hwm = next(
-                        (int(line.split()[1]) for line in status.splitlines() if line.startswith("VmHWM")), 0
-                    )
+                    lines = status.splitlines()
+                    hwm = next((int(line.split()[1]) for line in lines if line.startswith("VmHWM")), 0)
                     self.peak[pid] = max(self.peak.get(pid, 0), hwm)
-                    if pid not in self.kind:
-                        self.kind[pid] = (
-                            Path(f"/proc/{pid}/cmdline").read_bytes().replace(b"\0", b" ").decode()
-                        )
+                    command = Path(f"/proc/{pid}/cmdline").read_bytes().decode(errors="replace")
+                    if any(mark in command for mark in self.WORKERS):
+                        self.workers.add(pid)
             self._stop.wait(0.05)
 
     def stop(self) -> tuple[float, float]:
         self._stop.set()
         self._thread.join()
-        workers = [
-            peak
-            for pid, peak in self.peak.items()
-            if pid not in self.roots and not any(name in self.kind.get(pid, "") for name in self.DAEMONS)
-        ]
+        workers = [self.peak[pid] for pid in self.workers if pid not in self.roots]
         return self.peak.get(self.driver, 0) / 1024, max(workers, default=0) / 1024
 
 
-def timed(command: list[str], env: dict[str, str], runs: int, out: Path, head: int | None) -> list[float]:
-    """Medians of wall s, CPU s, driver MiB, largest worker MiB."""
+def timed(command: list[str], env: dict[str, str], runs: int, out: Path, head: Head | None) -> list[float]:
+    """Medians of wall s, CPU s, driver MiB, largest worker MiB. A failed run is retried (twice at most):
+    another process on the machine may have stopped every Ray (`ray stop --force`); the head is restarted."""
     rows = []
-    for _ in range(runs):
+    failures = 0
+    while len(rows) < runs:
+        if head is not None:
+            head.ensure()
         shutil.rmtree(out, ignore_errors=True)
         start = time.perf_counter()
         proc = subprocess.Popen(
             command, env=env, cwd=out.parent, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE
         )
-        sampler = Sampler(proc.pid, head)
+        sampler = Sampler(proc.pid, head.pid if head is not None else None)
         _pid, status, usage = os.wait4(proc.pid, 0)
         wall = time.perf_counter() - start
         driver, worker = sampler.stop()
         if status:
-            raise SystemExit(f"{command} failed: {proc.stderr.read().decode() if proc.stderr else ''}")
+            error = proc.stderr.read().decode().strip() if proc.stderr else ""
+            failures += 1
+            print(f"  (a run failed, retried: {error[:160]})", flush=True)
+            if failures > 2:
+                raise SystemExit(f"{command} failed: {error}")
+            continue
         rows.append([wall, usage.ru_utime + usage.ru_stime, driver, worker])
     return [statistics.median(column) for column in zip(*rows, strict=True)]
 
 
-@contextlib.contextmanager
-def ray_head(env: dict[str, str], tmp: Path) -> Iterator[tuple[dict[str, str], int]]:
-    """A Ray head on 127.0.0.1 of this run's own (token auth), and the env and pid to reach it."""
-    port = 26379
-    home = tmp / "rayhome"
-    home.mkdir()
-    head_env = {**env, "HOME": str(home), "TMPDIR": str(home), "RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER": "0"}
-    head_env.update(RAY_AUTH_MODE="token", RAY_AUTH_TOKEN=secrets.token_hex(32), RAY_USAGE_STATS_ENABLED="0")
-    command = [RAY, "start", "--head", "--block", "--node-ip-address", "127.0.0.1", "--port", str(port)]
-    command += ["--num-cpus", str(os.cpu_count()), "--include-dashboard", "false", "--disable-usage-stats"]
-    log = (home / "head.log").open("w")
-    head = subprocess.Popen(command, env=head_env, stdout=log, stderr=subprocess.STDOUT)
-    try:
+class Head:
+    """A Ray head on 127.0.0.1 of this run's own (token auth, `ray start --head --block`, stopped by its pid),
+    checked to listen on loopback only; `env` reaches it."""
+
+    PORT = 26379
+
+    def __init__(self, env: dict[str, str], tmp: Path) -> None:
+        home = tmp / "rayhome"
+        home.mkdir()
+        self.env = {**env, "HOME": str(home), "TMPDIR": str(home), "RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER": "0"}
+        self.env.update(RAY_AUTH_MODE="token", RAY_AUTH_TOKEN=secrets.token_hex(32))
+        self.env["RAY_ADDRESS"] = f"127.0.0.1:{self.PORT}"
+        self.log = (home / "head.log").open("w")
+        self.proc: subprocess.Popen[bytes] | None = None
+        self.pid = 0
+
+    def ensure(self) -> None:
+        if self.proc is not None and self.proc.poll() is None and self._listeners():
+            return
+        self.stop()
+        command = [
+            RAY,
+            "start",
+            "--head",
+            "--block",
+            "--node-ip-address",
+            "127.0.0.1",
+            "--port",
+            str(self.PORT),
+        ]
+        command += [
+            "--num-cpus",
+            str(os.cpu_count()),
+            "--include-dashboard",
+            "false",
+            "--disable-usage-stats",
+        ]
+        head_env = {k: v for k, v in self.env.items() if k != "RAY_ADDRESS"}
+        self.proc = subprocess.Popen(command, env=head_env, stdout=self.log, stderr=subprocess.STDOUT)
+        self.pid = self.proc.pid
         listeners: list[str] = []
         for _ in range(300):
-            out = subprocess.run(["ss", "-tlnpH"], capture_output=True, text=True, check=False).stdout
-            listeners = [
-                line.split()[3] for line in out.splitlines() if "raylet" in line or "gcs_server" in line
-            ]
-            if any(f":{port}" in address for address in listeners) and len(listeners) >= 2:
+            listeners = self._listeners()
+            if any(f":{self.PORT}" in address for address in listeners) and len(listeners) >= 2:
                 break
             time.sleep(0.1)
         loopback = ("127.0.0.1:", "[::ffff:127.0.0.1]:")
         if not listeners or not all(address.startswith(loopback) for address in listeners):
             raise SystemExit(f"the Ray head listens beyond loopback or not at all: {listeners}")
-        print(f"Ray head: listeners {', '.join(sorted(listeners))} (all loopback)")
-        yield {**head_env, "RAY_ADDRESS": f"127.0.0.1:{port}"}, head.pid
-    finally:
-        head.send_signal(signal.SIGTERM)
-        try:
-            head.wait(60)
-        except subprocess.TimeoutExpired:
-            head.kill()
-        log.close()
+        print(f"  (Ray head started: listeners {', '.join(sorted(listeners))}, all loopback)", flush=True)
+
+    def _listeners(self) -> list[str]:
+        out = subprocess.run(["ss", "-tlnpH"], capture_output=True, text=True, check=False).stdout
+        return [line.split()[3] for line in out.splitlines() if "raylet" in line or "gcs_server" in line]
+
+    def stop(self) -> None:
+        if self.proc is not None and self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGTERM)
+            try:
+                self.proc.wait(60)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+        self.proc = None
 
 
 def table(rows: list[tuple[str, str, list[float]]], messages_count: int) -> None:
@@ -198,7 +230,7 @@ def table(rows: list[tuple[str, str, list[float]]], messages_count: int) -> None
 
 def main() -> None:
     parser = argparse.ArgumentParser()
-    parser.add_argument("--what", choices=("fleet", "single", "all"), default="all")
+    parser.add_argument("--what", choices=("fleet", "imu", "mix", "all"), default="all")
     parser.add_argument("--bags", type=int, default=4)
     parser.add_argument("--imu", type=int, default=150_000, help="Imu messages per bag of the fleet")
     parser.add_argument("--tf", type=int, default=110_000, help="TFMessage messages per bag of the fleet")
@@ -213,61 +245,58 @@ def main() -> None:
     print(f"{os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.1f} at start")
     with tempfile.TemporaryDirectory(prefix="bench-ray-", dir=args.tmp) as tmp_name:
         tmp = Path(tmp_name)
-        with ray_head(env, tmp) as (head_env, head_pid):
-            export = [sys.executable, "-m", "rostool", "bag", "export"]
-            address = ["--engine", "ray", "--ray-address", head_env["RAY_ADDRESS"]]
-            if args.what in ("fleet", "all"):
-                fleet = tmp / "fleet"
-                fleet.mkdir()
-                write_bag(fleet / "bag0", args.imu, args.tf)
-                for index in range(1, args.bags):
-                    shutil.copytree(fleet / "bag0", fleet / f"bag{index}")
-                total = args.bags * (args.imu + args.tf)
-                each = f"{args.imu:,} Imu + {args.tf:,} TFMessage"
-                print(f"\nfleet: {args.bags} bags of {each} ({total:,} messages)")
-                out = tmp / "out"
-                rows = []
-                for engine, extra, run_env, head in (
-                    ("local -j 1", ["-j", "1"], env, None),
-                    ("local -j 2", ["-j", "2"], env, None),
-                    ("ray, private local", ["--engine", "ray"], env, None),
-                    ("ray --ray-address (running head)", address, head_env, head_pid),
-                ):
-                    command = [*export, str(fleet), "-o", str(out), *extra]
-                    rows.append((f"{args.bags}", engine, timed(command, run_env, args.runs, out, head)))
-                    print(f"  {engine}: {rows[-1][2][0]:.2f} s (load {os.getloadavg()[0]:.1f})", flush=True)
-                table(rows, total)
-                shutil.rmtree(fleet)
-            if args.what in ("single", "all"):
-                for label, imu, tf in (
-                    ("Imu", args.single_imu, 0),
-                    ("Imu + TFMessage", args.mix_imu, args.mix_tf),
-                ):
-                    bag = write_bag(tmp / "one", imu, tf)
-                    size = sum(f.stat().st_size for f in bag.iterdir()) / 2**20
-                    print(f"\none bag: {label}, {imu + tf:,} messages, {size:,.0f} MiB")
-                    out = tmp / "out"
-                    forced = [sys.executable, "-c", FORCED, str(bag), str(out)]
-                    rows = []
-                    for engine, command, run_env, head in (
-                        ("-j 1 (whole)", [*export, str(bag), "-o", str(out), "-j", "1"], env, None),
-                        ("-j 2, cost rule", [*export, str(bag), "-o", str(out), "-j", "2"], env, None),
-                        ("-j 2, two pieces", [*forced, "2", "1", "local"], env, None),
-                        (
-                            "ray (head), cost rule",
-                            [*export, str(bag), "-o", str(out), *address],
-                            head_env,
-                            head_pid,
-                        ),
-                        ("ray (head), two pieces", [*forced, "2", "1", "ray"], head_env, head_pid),
-                    ):
-                        rows.append(("1", engine, timed(command, run_env, args.runs, out, head)))
-                        print(
-                            f"  {engine}: {rows[-1][2][0]:.2f} s (load {os.getloadavg()[0]:.1f})", flush=True
-                        )
-                    table(rows, imu + tf)
-                    shutil.rmtree(bag)
+        head = Head(env, tmp)
+        try:
+            run(args, env, head, tmp)
+        finally:
+            head.stop()
     print(f"\nload average {os.getloadavg()[0]:.1f} at the end")
+
+
+def run(args: argparse.Namespace, env: dict[str, str], head: Head, tmp: Path) -> None:
+    export = [sys.executable, "-m", "rostool", "bag", "export"]
+    address = ["--engine", "ray", "--ray-address", head.env["RAY_ADDRESS"]]
+    out = tmp / "out"
+    if args.what in ("fleet", "all"):
+        fleet = tmp / "fleet"
+        fleet.mkdir()
+        write_bag(fleet / "bag0", args.imu, args.tf)
+        for index in range(1, args.bags):
+            shutil.copytree(fleet / "bag0", fleet / f"bag{index}")
+        total = args.bags * (args.imu + args.tf)
+        print(f"\nfleet: {args.bags} bags of {args.imu:,} Imu + {args.tf:,} TFMessage ({total:,} messages)")
+        rows = []
+        for engine, extra, run_env, by in (
+            ("local -j 1", ["-j", "1"], env, None),
+            ("local -j 2", ["-j", "2"], env, None),
+            ("ray, private local", ["--engine", "ray"], env, None),
+            ("ray --ray-address (running head)", address, head.env, head),
+        ):
+            command = [*export, str(fleet), "-o", str(out), *extra]
+            rows.append((f"{args.bags}", engine, timed(command, run_env, args.runs, out, by)))
+            print(f"  {engine}: {rows[-1][2][0]:.2f} s (load {os.getloadavg()[0]:.1f})", flush=True)
+        table(rows, total)
+        shutil.rmtree(fleet)
+    singles = [("Imu", args.single_imu, 0)] if args.what in ("imu", "all") else []
+    singles += [("Imu + TFMessage", args.mix_imu, args.mix_tf)] if args.what in ("mix", "all") else []
+    for label, imu, tf in singles:
+        bag = write_bag(tmp / "one", imu, tf)
+        size = sum(f.stat().st_size for f in bag.iterdir()) / 2**20
+        print(f"\none bag: {label}, {imu + tf:,} messages, {size:,.0f} MiB")
+        forced = [sys.executable, "-c", FORCED, str(bag), str(out)]
+        whole = [*export, str(bag), "-o", str(out)]
+        rows = []
+        for engine, command, run_env, by in (
+            ("-j 1 (whole)", [*whole, "-j", "1"], env, None),
+            ("-j 2, cost rule", [*whole, "-j", "2"], env, None),
+            ("-j 2, two pieces", [*forced, "2", "1", "local"], env, None),
+            ("ray (head), cost rule", [*whole, *address], head.env, head),
+            ("ray (head), two pieces", [*forced, "2", "1", "ray"], head.env, head),
+        ):
+            rows.append(("1", engine, timed(command, run_env, args.runs, out, by)))
+            print(f"  {engine}: {rows[-1][2][0]:.2f} s (load {os.getloadavg()[0]:.1f})", flush=True)
+        table(rows, imu + tf)
+        shutil.rmtree(bag)
 
 
 if __name__ == "__main__":
