@@ -8,6 +8,9 @@ from __future__ import annotations
 
 import json
 import re
+import socket
+import struct
+import threading
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -203,3 +206,22 @@ def test_bag_play_through_a_serving_daemon_publishes_the_bags_types(
     assert played.returncode == 0, played.stderr
     assert wait_until(lambda: len(listener.of("heard")) >= 10, timeout=10)
     assert [e["data"] for e in listener.of("heard")] == [f"Hello, world! {i}" for i in range(10)]
+
+
+def test_relay_frames_carry_bytes_and_times_and_refuse_what_is_over_the_limit() -> None:
+    from rostool.graph.daemon import wire
+
+    left, right = socket.socketpair()
+    with left, right:
+        big = bytes(range(256)) * 4096  # 1 MiB: sent after its header, read in pieces
+        for kind, stamp, payload in ((wire.TYPE, 0, b'{"name": "x"}'), (wire.MESSAGE, 123, big)):
+            sender = threading.Thread(target=wire.send_frame, args=(left, kind, stamp, payload))
+            sender.start()
+            assert wire.receive_frame(right) == (kind, stamp, payload)
+            sender.join()
+        left.sendall(struct.pack(">IcQ", wire.MAX_SAMPLE + 1, wire.MESSAGE, 1))  # a header that lies
+        with pytest.raises(wire.WireError, match="over the"):
+            wire.receive_frame(right)
+        left.close()
+        with pytest.raises(wire.WireError, match="closed"):
+            wire.receive_frame(right)
