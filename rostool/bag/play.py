@@ -364,7 +364,7 @@ class Player(PlayControls):
         for plan, stamp, payload in self._messages(start):
             if limit is not None and self.result.published + before + published >= limit:
                 break
-            if before + published == 0 and self._seek_to is None:
+            if before + published == 0:
                 now = time.perf_counter()
                 self.clock.start(stamp, now)
                 self._next_tick = now
