@@ -97,10 +97,16 @@ def test_player_services_pause_resume_and_stop(
     try:
         assert listener.wait_for("heard", lambda e: e["data"] == "n 2", timeout=30)
         ros2 = PEERS_DIR / "jazzy" / "bin" / "ros2"  # the real ros2 lists them with their types
-        listed = subprocess.run([str(ros2), "service", "list", "-t", "--no-daemon"], capture_output=True,
-                                env=peer_env(graph_env, tmp_path), text=True, timeout=60)  # fmt: skip
-        for name, (kind, _value) in PLAYER_SERVICES.items():
-            assert f"/rosbag2_player/{name} [rosbag2_interfaces/srv/{kind}]" in listed.stdout, listed.stdout
+        wanted = [f"/rosbag2_player/{name} [rosbag2_interfaces/srv/{kind}]"
+                  for name, (kind, _value) in PLAYER_SERVICES.items()]  # fmt: skip
+        listed = ""
+        for _attempt in range(5):  # a new participant's discovery may take longer than one spin
+            listed = subprocess.run([str(ros2), "service", "list", "-t", "--no-daemon", "--spin-time", "2"],
+                                    env=peer_env(graph_env, tmp_path), capture_output=True, text=True,
+                                    timeout=60).stdout  # fmt: skip
+            if all(line in listed for line in wanted):
+                break
+        assert all(line in listed for line in wanted), listed
         call(graph_env, "pause", "Pause")
         assert call(graph_env, "is_paused", "IsPaused").endswith("(paused=True)")
         before = heard(listener)
