@@ -225,20 +225,30 @@ class DaemonGraph:
 
 
 class LentTypes(Ros2Types):
-    """Types made before the direct graph: what is registered in them reaches its types too."""
+    """Types made before the direct graph; once it is made, its types and these share one store, so what
+    either registers (a bag's types, a service's, one learned from a publisher) both know, and a renderer
+    made with these (echo's, service call's field lookup) sees it."""
 
     _also: Ros2Types | None = None
 
     def lend_to(self, other: Ros2Types) -> None:
-        missing = {name: defs for name, defs in self.store.fielddefs.items() if not other.in_store(name)}
-        if missing:
-            other.register(missing)
+        """`other`: the direct graph's types, just made (nothing of theirs holds their store yet)."""
+        self.register(_missing(other, self))
+        if other.distro == self.distro:
+            other.store = self.store
+            return
+        # another distro than the daemon's (not one key): each keeps its store, ours passed on as we go
+        other.register(_missing(self, other))
         self._also = other
 
     def register(self, typs: Mapping[str, Any]) -> None:
         super().register(typs)
         if self._also is not None:
             self._also.register(typs)
+
+
+def _missing(source: Ros2Types, target: Ros2Types) -> dict[str, Any]:
+    return {name: defs for name, defs in source.store.fielddefs.items() if not target.in_store(name)}
 
 
 def daemon_graph(requested_backend: str | None, direct: Callable[[], Graph]) -> Graph:
