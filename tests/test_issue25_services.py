@@ -216,10 +216,12 @@ def test_recorder_snapshot_service_writes_the_held_second(
 
 
 @pytest.mark.parametrize("distro", ["jazzy"], indirect=True)
-def test_recorder_pause_resume_and_is_paused_services(
+def test_recorder_pause_resume_is_paused_and_split_services(
     graph_env: dict[str, str], start_peer: Start, tmp_path: Path
 ) -> None:
-    """/rosbag2_recorder/pause, resume and is_paused: what arrives while paused is not recorded."""
+    """/rosbag2_recorder/pause, resume and is_paused: what arrives while paused is not recorded;
+    split_bagfile starts the next file and loses nothing."""
+    import yaml
     from rosbags.highlevel import AnyReader
 
     talker = start_peer("--name", "talker", "--talk", "/chatter", "--rate", "20")
@@ -245,8 +247,14 @@ def test_recorder_pause_resume_and_is_paused_services(
         assert recorder_call("is_paused", "IsPaused").endswith("IsPaused_Response(paused=False)")
         at_resume = talker.of("published")[-1]["count"]
         talker.wait_for("published", lambda e: e["count"] > at_resume + 40, timeout=30)
+        recorder_call("split_bagfile", "SplitBagfile")
+        at_split = talker.of("published")[-1]["count"]
+        talker.wait_for("published", lambda e: e["count"] > at_split + 40, timeout=30)
     finally:
         _out, err = recorder.stop()
+    info = yaml.safe_load((bag / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
+    assert info["relative_file_paths"] == ["paused_0.mcap", "paused_1.mcap"], info
+    assert all(f["message_count"] > 10 for f in info["files"]), info["files"]
     assert "Pausing recording." in err and "Resuming recording." in err and "Traceback" not in err, err
     with AnyReader([bag]) as reader:
         numbers = [int(reader.deserialize(data, c.msgtype).data.removeprefix("hello "))

@@ -141,10 +141,12 @@ def serve_recorder(
     paused: Callable[[], bool],
     toggle: Callable[[], None],
     snapshot: Callable[[], bool] | None,
+    split: Callable[[], object],
     warn: Callable[[str], None],
 ) -> Served:
-    """The recorder's NODE/pause, resume and is_paused (rosbag2's `/rosbag2_recorder/...`), and in snapshot
-    mode NODE/snapshot: `snapshot()` writes the snapshot and says whether it was written."""
+    """The recorder's NODE/pause, resume, is_paused and split_bagfile (rosbag2's `/rosbag2_recorder/...`;
+    `split()` returns once the next file is started), and in snapshot mode NODE/snapshot: `snapshot()`
+    writes the snapshot and says whether it was written."""
     lock = threading.Lock()
 
     def set_paused(wanted: bool) -> dict[str, Any]:
@@ -153,10 +155,15 @@ def serve_recorder(
                 toggle()
         return {}
 
+    def split_file() -> dict[str, Any]:
+        split()
+        return {}
+
     handlers: dict[str, tuple[str, Callable[[Any], Mapping[str, Any]]]] = {
         "pause": ("Pause", lambda _request: set_paused(True)),
         "resume": ("Resume", lambda _request: set_paused(False)),
         "is_paused": ("IsPaused", lambda _request: {"paused": paused()}),
+        "split_bagfile": ("SplitBagfile", lambda _request: split_file()),
     }
     if snapshot is not None:
         handlers["snapshot"] = ("Snapshot", lambda _request: {"success": snapshot()})

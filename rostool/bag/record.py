@@ -143,6 +143,7 @@ class Recorder:
         )
         self._snapshot_asked = threading.Event()
         self._snapshot_waiters: list[threading.Event] = []  # set once the snapshot asked for is written
+        self._split_waiters: list[threading.Event] = []  # set once the next file is started
         self.snapshots: list[int] = []  # messages written by each snapshot
         self.result = RecordResult()
         self._subscribed: set[str] = set()
@@ -280,6 +281,8 @@ class Recorder:
                         self._sink.flush()
                     for done in waiters:
                         done.set()
+                if self._split_waiters:
+                    self._split_now()
                 now = time.monotonic()
                 if self._sink is not None and (not batch or now - last_flush >= FLUSH_INTERVAL):
                     self._sink.flush()
@@ -346,6 +349,24 @@ class Recorder:
         self._snapshot_asked.set()
         self.queue.ready.set()
         return done
+
+    def split(self) -> threading.Event:
+        """A rosbag2 directory starts its next file now (done by the writer thread); the event is set once
+        it has (at once for a single file, which cannot be split)."""
+        done = threading.Event()
+        if not isinstance(self._sink, Rosbag2DirSink):
+            done.set()
+            return done
+        self._split_waiters.append(done)
+        self.queue.ready.set()
+        return done
+
+    def _split_now(self) -> None:
+        waiters, self._split_waiters = self._split_waiters, []
+        if isinstance(self._sink, Rosbag2DirSink):
+            self._sink.split()
+        for done in waiters:
+            done.set()
 
     @property
     def paused(self) -> bool:

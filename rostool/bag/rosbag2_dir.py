@@ -131,6 +131,13 @@ class Rosbag2DirSink:
             self._file_start = time_ns
         return self._sink.write(key, header, time_ns, payload)
 
+    def split(self) -> None:
+        """Start the next file now (rosbag2's split_bagfile service)."""
+        self._close_part()
+        self._index += 1
+        self._sink = self._open_part()
+        self._file_start = None
+
     def flush(self) -> None:
         self._sink.flush()
 

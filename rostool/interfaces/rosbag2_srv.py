@@ -14,6 +14,7 @@ ROSBAG2_SERVICES: dict[str, str] = {
     "rosbag2_interfaces/srv/Seek": "builtin_interfaces/Time time\n---\nbool success\n",
     "rosbag2_interfaces/srv/SetRate": "float64 rate\n---\nbool success\n",
     "rosbag2_interfaces/srv/Snapshot": "---\nbool success\n",
+    "rosbag2_interfaces/srv/SplitBagfile": "---\n",
     "rosbag2_interfaces/srv/Stop": "---\n",
     "rosbag2_interfaces/srv/TogglePaused": "---\n",
 }

@@ -98,6 +98,7 @@ def run_record(ctx: click.Context, request: RecordRequest) -> None:
             served = serve_recorder(
                 graph, graph.resolve(request.node_name), lambda: recorder.paused, toggle,
                 (lambda: snapshot().wait(SNAPSHOT_WAIT)) if take is not None else None,
+                lambda: recorder.split().wait(SNAPSHOT_WAIT),
                 warn if take is not None else lambda _text: None,  # said only where asked for (snapshots)
             )  # fmt: skip
         with (
