@@ -128,7 +128,9 @@ def record(ctx: click.Context, flags: RecordFlags) -> None:
     and every rostool bag verb read. Messages are stored as received (CDR) with the publisher's QoS and
     the receive time. With -a/--all-topics/-e/--topic-types, topics that appear later are recorded too.
     Ctrl+C and SIGTERM leave a complete bag (exit 0). On a terminal SPACE (or SIGUSR1) pauses and resumes,
-    and a dashboard shows each topic's messages, rate, bandwidth, bytes written and drops.
+    and a dashboard shows each topic's messages, rate, bandwidth, bytes written and drops. rosbag2's
+    recorder services are served: /rosbag2_recorder/pause, resume, is_paused, split_bagfile (and snapshot
+    with --snapshot-mode; the node is --node-name).
 
     \b
     Examples:
