@@ -212,16 +212,18 @@ def test_relay_frames_carry_bytes_and_times_and_refuse_what_is_over_the_limit() 
     from rostool.graph.daemon import wire
 
     left, right = socket.socketpair()
-    with left, right:
-        big = bytes(range(256)) * 4096  # 1 MiB: sent after its header, read in pieces
-        for kind, stamp, payload in ((wire.TYPE, 0, b'{"name": "x"}'), (wire.MESSAGE, 123, big)):
-            sender = threading.Thread(target=wire.send_frame, args=(left, kind, stamp, payload))
-            sender.start()
-            assert wire.receive_frame(right) == (kind, stamp, payload)
-            sender.join()
+    with left, right, right.makefile("rb") as stream:
+        big = bytes(range(256)) * 4096  # 1 MiB: sent after its header
+        frames = [(wire.TYPE, 0, b'{"name": "x"}'), (wire.MESSAGE, 123, b"\x00\x01"), (wire.MESSAGE, 7, big),
+                  (wire.WARNING, 9, b"a line")]  # fmt: skip
+        sender = threading.Thread(target=wire.send_frames, args=(left, frames))
+        sender.start()
+        assert [wire.receive_frame(stream) for _ in frames] == frames
+        sender.join()
         left.sendall(struct.pack(">IcQ", wire.MAX_SAMPLE + 1, wire.MESSAGE, 1))  # a header that lies
         with pytest.raises(wire.WireError, match="over the"):
-            wire.receive_frame(right)
+            wire.receive_frame(stream)
+        left.sendall(struct.pack(">IcQ", 10, wire.MESSAGE, 1) + b"short")
         left.close()
         with pytest.raises(wire.WireError, match="closed"):
-            wire.receive_frame(right)
+            wire.receive_frame(stream)

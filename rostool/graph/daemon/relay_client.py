@@ -22,6 +22,7 @@ from rostool.graph.daemon import wire
 from rostool.interfaces.ros2_types import Ros2Types
 
 Warn = Callable[[str], None]
+STREAM_BUFFER = 256 * 1024  # the connection's read buffer: a batch of small frames in one system call
 
 
 class RelayedSubscription:
@@ -55,13 +56,14 @@ class RelayedSubscription:
             inner.close()
 
     def _read(self) -> None:
-        sock, topic, deliver = self._sock, self._topic, self._on_message
+        topic, deliver = self._topic, self._on_message
+        stream = self._sock.makefile("rb", buffering=STREAM_BUFFER)
         type_name = ""
         store = self._types.store
         decoder = _decoder(store, type_name)
         try:
             while not self._closed.is_set():
-                kind, stamp, payload = wire.receive_frame(sock)
+                kind, stamp, payload = wire.receive_frame(stream)
                 if kind == wire.MESSAGE:
                     deliver(Received(topic, payload, stamp, type_name, decoder))
                 elif kind == wire.TYPE:
@@ -78,6 +80,8 @@ class RelayedSubscription:
             if not self._closed.is_set():
                 self._warn(f"the graph daemon stopped relaying {topic} ({err}); subscribing directly")
                 self._go_direct()
+        finally:
+            stream.close()  # it holds the socket open too
 
     def _learn(self, payload: bytes) -> str:
         """The type the daemon reads, made known to this process's store from the daemon's definition

@@ -25,6 +25,7 @@ from rostool.graph.ros2_base.qos import QosRequest
 from rostool.graph.ros2_base.relaying import subscribe_for
 
 QUEUE_BYTES = 64 * 1024 * 1024  # a client's messages waiting to be sent
+BATCH_BYTES = 1024 * 1024  # frames sent in one write, at most about this much
 log = logging.getLogger("rostool.daemon")
 Frame = tuple[bytes, int, bytes]
 
@@ -135,17 +136,22 @@ class Relay:
                 self._wake.clear()
                 while not self._done.is_set():
                     with self._lock:
-                        if not self._frames:
-                            break
-                        frame = self._frames.popleft()
-                        self._bytes -= len(frame[2])
+                        batch: list[Frame] = []
+                        size = 0
+                        while self._frames and size < BATCH_BYTES:
+                            frame = self._frames.popleft()
+                            batch.append(frame)
+                            size += len(frame[2])
+                        self._bytes -= size
                         dropped = self._dropped
                     if dropped > reported:
                         text = f"the graph daemon dropped {dropped - reported} messages of {self.topic}: " \
                                "they are not read as fast as they come"  # fmt: skip
-                        wire.send_frame(self.connection, wire.WARNING, time.time_ns(), text.encode())
+                        batch.insert(0, (wire.WARNING, time.time_ns(), text.encode()))
                         reported = dropped
-                    wire.send_frame(self.connection, *frame)
+                    if not batch:
+                        break
+                    wire.send_frames(self.connection, batch)
         except wire.WireError as err:
             log.info("relay of %s ended: %s", self.topic, err)
         finally:
