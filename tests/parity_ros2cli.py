@@ -3,8 +3,11 @@ rclpy nodes shared by a test module, and one case run as `ros2 ARGS` and `rostoo
 ARGS` for B in dds and rclpy, each result recorded for docs/ros2cli-parity.md (tests/parity_table.py).
 
 ros2 runs as a user's would: with its daemon (started and warmed up once per module, stopped at its end),
-the loopback-only Fast DDS profile and the module's ROS_DOMAIN_ID. Verbs that list the graph run one after
-another (each tool is a node that the others would see); the others run side by side.
+the loopback-only Fast DDS profile and the module's ROS_DOMAIN_ID. So does rostool: verbs that list the graph
+are answered by its graph daemon of each backend (warmed up beside ros2's), and the cases a module names
+`direct` are asked once more without it, so that the direct paths keep their referee too. Verbs that list
+the graph run one after another (each tool is a node that the others would see); the others run side by
+side.
 """
 
 from __future__ import annotations
@@ -16,6 +19,7 @@ import re
 import subprocess
 import sys
 import time
+from collections import Counter
 from collections.abc import Callable, Iterator
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
@@ -24,7 +28,15 @@ from pathlib import Path
 import pytest
 
 from tests.ros2_backends import rostool_lines
-from tests.ros2_peers import PEERS_DIR, RclpyPeer, assert_loopback_only, peer_env, rclpy_command
+from tests.ros2_peers import (
+    PEERS_DIR,
+    RclpyPeer,
+    WarmDaemon,
+    assert_loopback_only,
+    peer_env,
+    rclpy_command,
+    rostool_rclpy_popen,
+)
 from tests.support import IN_CI, ros2_env, wait_until
 
 DISTRO = "jazzy"  # the distro of the referee's source
@@ -53,11 +65,12 @@ def sorted_lines(text: str) -> str:
 
 def without_observers(text: str) -> str:
     """The graph without the tools under test: a rostool run on the rclpy backend is a node (/rostool_PID)
-    that ros2's daemon may still list for a moment after it ended."""
+    that ros2's daemon may still list for a moment after it ended; rostool's graph daemons are nodes that
+    ros2 lists and that leave themselves out."""
     return "".join(line for line in text.splitlines(keepends=True) if not _OBSERVER.search(line))
 
 
-_OBSERVER = re.compile(r"\brostool_\d+\b")
+_OBSERVER = re.compile(r"\brostool_\d+\b|^/_rostool_daemon_\d+$", re.MULTILINE)
 
 
 def service_wait(text: str) -> str:
@@ -106,6 +119,7 @@ class Case:
     error: bool = False
     timeout: float = 30.0
     name: str = ""  # how the results name it, when its arguments hold a temporary path
+    served: bool = True  # a listing: answered by rostool's daemon (False: a count that would include it)
     stdin: str | None = None
 
     @property
@@ -129,6 +143,7 @@ class Outcome:
     case: Case
     ros2: Run
     tools: dict[str, Run] = field(default_factory=dict)
+    direct: dict[str, Run] = field(default_factory=dict)  # the same, without rostool's daemon
 
 
 def require_ros2cli() -> None:
@@ -149,7 +164,8 @@ def _run(command: list[str], env: dict[str, str], timeout: float, stdin: str | N
 
 
 class ParityGraph:
-    """The module's real nodes and the three ways of asking them."""
+    """The module's real nodes and the ways of asking them: ros2 (its daemon), rostool on each backend
+    through its graph daemon (`served`) and without one."""
 
     def __init__(self, tmp: Path, peers: list[list[str]]) -> None:
         self.env = ros2_env()
@@ -160,6 +176,7 @@ class ParityGraph:
             self.peer_env, AMENT_PREFIX_PATH=venv, PATH=f"{venv}/bin:{self.peer_env['PATH']}"
         )
         self.peers = [RclpyPeer(DISTRO, self.env, tmp, args) for args in peers]
+        self.daemons: dict[str, WarmDaemon] = {}
         self.outcomes: list[Outcome] = []
 
     def ros2(self, args: list[str], timeout: float = 30, stdin: str | None = None) -> Run:
@@ -168,43 +185,85 @@ class ParityGraph:
     def ros2_command(self, args: list[str]) -> list[str]:
         return [str(ROS2), *args]
 
-    def rostool(self, backend: str, args: list[str], timeout: float = 30, stdin: str | None = None) -> Run:
-        command, env = self.rostool_command(backend, args)
+    def rostool(
+        self,
+        backend: str,
+        args: list[str],
+        timeout: float = 30,
+        stdin: str | None = None,
+        served: bool = False,
+    ) -> Run:
+        command, env = self.rostool_command(backend, args, served)
         return _run(command, env, timeout, stdin)
 
-    def rostool_command(self, backend: str, args: list[str]) -> tuple[list[str], dict[str, str]]:
+    def rostool_command(
+        self, backend: str, args: list[str], served: bool = False
+    ) -> tuple[list[str], dict[str, str]]:
+        env = self.daemons[backend].env if served else self.env
         if backend == "rclpy":
-            return rclpy_command(["--ros2", *args], DISTRO), self.peer_env
-        return [sys.executable, "-m", "rostool", "--ros2", *args], self.env
+            return rclpy_command(["--ros2", *args], DISTRO), peer_env(env, self.tmp)
+        return [sys.executable, "-m", "rostool", "--ros2", *args], env
 
-    def compare(self, case: Case) -> Outcome:
+    def compare(self, case: Case, direct: bool = False) -> Outcome:
+        """ros2 and rostool on both backends; a listing through rostool's daemons, and with `direct` also
+        without them (`Outcome.direct`)."""
         # the rclpy backend before the DDS one: its node has left ros2's view by the next case
         order = ("rclpy", "dds")
+        served = case.graph and case.served
         jobs: list[Callable[[], Run]] = [lambda: self.ros2(list(case.args), case.timeout, case.stdin)]
-        jobs += [lambda b=b: self.rostool(b, list(case.args), case.timeout, case.stdin) for b in order]
+        jobs += [
+            lambda b=b: self.rostool(b, list(case.args), case.timeout, case.stdin, served) for b in order
+        ]
+        if direct:
+            jobs += [lambda b=b: self.rostool(b, list(case.args), case.timeout, case.stdin) for b in order]
         if case.graph:
             runs = [job() for job in jobs]
         else:
             with ThreadPoolExecutor(len(jobs)) as pool:
                 runs = list(pool.map(lambda job: job(), jobs))
-        outcome = Outcome(case, runs[0], dict(zip(order, runs[1:], strict=True)))
+        outcome = Outcome(case, runs[0], dict(zip(order, runs[1:3], strict=True)))
+        if direct:
+            outcome.direct = dict(zip(order, runs[3:], strict=True))
         self.outcomes.append(outcome)
         return outcome
 
     def warm_up(self, ready: Callable[[ParityGraph], bool]) -> None:
-        """Start ros2's daemon and wait until it has seen the whole graph (a fresh daemon answers with what
-        it has discovered so far)."""
+        """Start ros2's daemon and rostool's (one per backend) and wait until each has seen the whole graph
+        (a fresh daemon answers with what it has discovered so far)."""
+        self.daemons = {
+            "dds": WarmDaemon(self.env),
+            "rclpy": WarmDaemon(self.env, lambda args, env: rostool_rclpy_popen(args, env, self.tmp, DISTRO)),
+        }
         for peer in self.peers:
             peer.wait_for("ready", timeout=30)
         self.ros2(["daemon", "start"])
+        for daemon in self.daemons.values():
+            daemon.ready()
         assert wait_until(lambda: ready(self), timeout=30, interval=0.2), "ros2's daemon never saw the graph"
+        whole = self.ros2(["node", "list", "-a"]).stdout.splitlines()
+        peers = Counter(line for line in whole if not _DAEMONS.search(line))  # twins count twice
+        for backend in self.daemons:
+
+            def seen(backend: str = backend) -> bool:
+                listed = self.rostool(backend, ["node", "list", "-a"], served=True).stdout.splitlines()
+                return peers <= Counter(listed)
+
+            assert wait_until(seen, timeout=30, interval=0.2), (
+                f"rostool's {backend} daemon never saw the graph"
+            )
 
     def close(self) -> None:
         self.ros2(["daemon", "stop"])
+        left = [pid for daemon in self.daemons.values() for pid in daemon.stop()]
         for peer in self.peers:
             addresses = peer.bound_addresses()
             peer.stop()
             assert_loopback_only(addresses)
+        assert not left, f"graph daemons still running after `daemon stop --all`: {left}"
+
+
+# the daemons' own nodes: ros2's and rostool's
+_DAEMONS = re.compile(r"^/_ros2cli_daemon|^/_rostool_daemon|\brostool_\d+\b")
 
 
 @contextlib.contextmanager

@@ -35,6 +35,11 @@ class RclpyContext:
                 node_name, context=self.context, start_parameter_services=False, enable_rosout=False,
                 parameter_overrides=quiet,
             )  # fmt: skip
+            # nor the /parameter_events publisher rclpy gives every node: this one never sets a parameter,
+            # and `ros2 topic list -v` beside a long-lived rostool (its graph daemon) would count it
+            events = getattr(self.node, "_parameter_event_publisher", None)
+            if events is not None:
+                self.node.destroy_publisher(events)
         except Exception as err:  # rclpy's RCLError / RMWError: the RMW or its configuration failed
             with contextlib.suppress(Exception):
                 self.context.try_shutdown()

@@ -35,6 +35,10 @@ GRAPH_QUIET_SECONDS = 0.5
 # announcements (and their endpoints) keep coming for a second or two, later on a loaded machine; the
 # daemon's long-lived graph answers at once
 SETTLE_MIN_SECONDS = 2.0
+# Fast DDS: a participant may be heard only at its next periodic announcement (every 3 s), even after
+# others answered at once (measured: one peer at 0.55 s, three at 2.85 s, a listing settled at 2.34 s missed
+# them), so "quiet for a moment" proves nothing before one period has passed
+FASTDDS_SETTLE_MIN_SECONDS = 3.3
 # nothing but ourselves seen: how long before "no nodes found". A Fast DDS participant may answer a new one
 # only with its next periodic announcement (every 3 s), so discovery takes from 0 to about 3 s
 SETTLE_MAX_SECONDS = 4.5
@@ -147,7 +151,7 @@ class RclpyGraph(Ros2Base):
             # endpoints may come before their node's name (rmw learns names from ros_discovery_info), and a
             # hidden node alone (a graph daemon's, ros2cli's) is often found before the others
             named = any(not hidden_name(self.full_name(n, ns)) for n, ns in last[0])
-            quiet = named and now - changed >= GRAPH_QUIET_SECONDS and now - started >= SETTLE_MIN_SECONDS
+            quiet = named and now - changed >= GRAPH_QUIET_SECONDS and now - started >= self._settle_floor()
             if found and (self._settled or quiet or now - started >= SETTLE_MAX_SECONDS):
                 self._settled = True
                 return True
@@ -162,6 +166,12 @@ class RclpyGraph(Ros2Base):
             current = self._snapshot()
             if current != last:
                 last, changed = current, time.monotonic()
+
+    def _settle_floor(self) -> float:
+        from rclpy.utilities import get_rmw_implementation_identifier
+
+        fast = get_rmw_implementation_identifier().startswith("rmw_fastrtps")
+        return FASTDDS_SETTLE_MIN_SECONDS if fast else SETTLE_MIN_SECONDS
 
     def _spin(self, seconds: float, require_peers: bool, until: Callable[[], bool] | None) -> bool:
         """Wait `seconds` from the first listing, as ros2cli's --spin-time (or until `until()`)."""
