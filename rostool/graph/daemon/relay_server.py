@@ -26,6 +26,7 @@ from rostool.graph.ros2_base.relaying import subscribe_for
 
 QUEUE_BYTES = 64 * 1024 * 1024  # a client's messages waiting to be sent
 BATCH_BYTES = 1024 * 1024  # frames sent in one write, at most about this much
+COALESCE_SECONDS = 0.001
 log = logging.getLogger("rostool.daemon")
 Frame = tuple[bytes, int, bytes]
 
@@ -125,14 +126,17 @@ class Relay:
                 del self._frames[index]
                 self._bytes -= len(dropped[2])
                 self._dropped += 1
-        self._wake.set()
+        if not self._wake.is_set():
+            self._wake.set()
 
     # --- the sender's thread ----------------------------------------------------------------------
     def _send(self) -> None:
         reported = 0
         try:
             while not self._done.is_set():
-                self._wake.wait(0.5)
+                if self._wake.wait(0.5):
+                    # a moment for more to come: a fast topic's messages go in fewer, larger writes
+                    time.sleep(COALESCE_SECONDS)
                 self._wake.clear()
                 while not self._done.is_set():
                     with self._lock:
