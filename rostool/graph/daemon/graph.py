@@ -78,8 +78,8 @@ class DaemonGraph:
     @property
     def types(self) -> Any:
         """The direct graph's types once it exists. Before (a relayed subscription needs no direct graph),
-        types of the daemon's distro, which pass on what is registered in them to the direct graph made
-        later (bag play registers a bag's types before it publishes)."""
+        types of the daemon's distro, whose store the direct graph made later shares (bag play registers a
+        bag's types before it publishes; service call makes its field lookup before it calls)."""
         if self._direct is None and self._types is None and not self._bypass:
             distro = self._daemon_distro()
             if distro is not None:
