@@ -20,7 +20,7 @@ FLAT_MESSAGE = 0.5e-6  # seconds per message of a column-wise type
 NESTED_MESSAGE = 50e-6  # seconds per message decoded one by one
 BYTE = 1e-9  # seconds per byte of messages (copied, compressed, written)
 PARALLEL_FROM = 1.5  # seconds of work from which worker processes pay off (their start-up is ~0.5 s)
-PIECE_SECONDS = 4.0  # the least work a piece of a cut bag holds: its worker's start-up and the join pay off
+PIECE_SECONDS = 3.0  # the least work a piece of a cut bag holds: its worker's start-up and the join pay off
 
 _PRIMITIVES = frozenset((
     "bool", "byte", "char", "int8", "uint8", "int16", "uint16", "int32", "uint32", "int64", "uint64",
