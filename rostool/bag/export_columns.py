@@ -49,9 +49,16 @@ class TypePlan:
         self.style = style
         self.ros_version = ros_version
         self._time_names = ("secs", "nsecs") if style == "ros1" else ("sec", "nanosec")
+        self._fields: dict[str, list[tuple[str, Any]]] = {}  # `plain` asks once per nested message
+        self._converters: dict[str, Callable[[Any], Any]] = {}
 
     def fields(self, msgtype: str) -> list[tuple[str, Any]]:
-        return [(name, desc) for name, desc in self.fielddefs[msgtype][1] if name not in _SKIPPED_FIELDS]
+        found = self._fields.get(msgtype)
+        if found is None:
+            defs = self.fielddefs[msgtype][1]
+            found = [(name, desc) for name, desc in defs if name not in _SKIPPED_FIELDS]
+            self._fields[msgtype] = found
+        return found
 
     def base(self, name: str) -> str:
         return _PRIMITIVES.get(name, "string")
@@ -103,8 +110,45 @@ class TypePlan:
             return [Column(path, spec, names, _bytes)]
         if kind == 1 or rest[0][0] == 1:  # numpy arrays and lists of primitives go to pyarrow as they are
             return [Column(path, spec, names)]
-        plain = self.plain
+        element = rest[0]
+        plain = self.converter(element[1]) if element[0] == 2 else self.plain
         return [Column(path, spec, names, lambda items: [plain(item) for item in items])]
+
+    def converter(self, msgtype: str) -> Callable[[Any], Any]:
+        """`plain` for messages of one type, its fields' conversions looked up once (sequences of messages
+        are the per-message path's bulk: tf2_msgs/TFMessage)."""
+        found = self._converters.get(msgtype)
+        if found is not None:
+            return found
+        if msgtype in TIME_TYPES:
+            sec, nanosec = self._time_names
+
+            def convert(value: Any) -> Any:
+                return {sec: int(value.sec), nanosec: int(value.nanosec)}
+
+        else:
+            parts: list[tuple[str, Callable[[Any], Any] | None]] = []
+            for name, (kind, rest) in self.fields(msgtype):
+                if kind == 2:
+                    parts.append((name, self.converter(rest)))
+                elif kind == 1:
+                    parts.append((name, None))
+                elif self.is_bytes(rest[0]):
+                    parts.append((name, _bytes))
+                elif rest[0][0] == 1:
+                    parts.append((name, _list))
+                else:
+                    sub = self.converter(rest[0][1]) if rest[0][0] == 2 else self.plain
+                    parts.append((name, lambda items, sub=sub: [sub(item) for item in items]))
+
+            def convert(value: Any) -> Any:
+                return {
+                    name: getattr(value, name) if part is None else part(getattr(value, name))
+                    for name, part in parts
+                }
+
+        self._converters[msgtype] = convert
+        return convert
 
     def plain(self, value: Any) -> Any:
         """A nested message as the dict pyarrow takes for its struct (byte arrays as bytes)."""
@@ -134,6 +178,10 @@ def _stamp_ns(stamp: Any) -> int:
 
 def _bytes(value: Any) -> bytes:
     return value.tobytes() if hasattr(value, "tobytes") else bytes(value)
+
+
+def _list(value: Any) -> list[Any]:
+    return value.tolist() if hasattr(value, "tolist") else list(value)
 
 
 def arrow_type(spec: Spec) -> Any:
