@@ -1,7 +1,8 @@
 """`rostool bag export`: one table per topic (Parquet or CSV), streamed in batches; images as PNG or MP4.
 
-Each topic's rows are buffered column by column and written every `batch_rows` rows or `batch_bytes`
-bytes of messages (a Parquet row group, or CSV lines), so memory stays flat on a bag of any size.
+Each topic's rows are buffered column by column and decoded every `batch_rows` rows or `batch_bytes`
+bytes of messages (CSV lines at once; Parquet row groups of up to `row_group_rows` rows or
+`row_group_bytes`, export_tables.py), so memory stays flat on a bag of any size.
 Files are written under a `.partial` name and renamed when complete; an interrupted export removes them.
 Layout: OUT/TOPIC.parquet for one bag; OUT/TOPIC/bag=NAME/part-0.parquet (a hive-partitioned dataset)
 when a bag is exported as part of several (`partition`). TOPIC is the topic name without its leading
