@@ -88,6 +88,7 @@ def test_echo_through_the_daemon_and_its_reader_leaves_with_the_verb(
         got = numbers(echo.stdout)
         assert got == list(range(got[0], got[0] + len(got)))  # consecutive: nothing lost or reordered
         assert relays(tool) == ["/t"]
+        assert "  relays: 1 (/t)\n" in tool(["daemon", "status"]).stdout  # the text form says it too
         assert seen_later(talker, daemons), subscribers(talker, "/t")
         assert bound_addresses(echo.proc.pid) == []  # the verb never joined the graph: no UDP socket
         echo.proc.kill()  # SIGKILL: no goodbye; the daemon sees its connection end

@@ -97,3 +97,5 @@ def status(as_json: bool) -> None:
     click.echo(f"  domain: {found['domain']}\n  uptime: {found['uptime']:.1f} s\n  log: {found['log']}")
     click.echo(f"  graph: {size['nodes']} nodes, {size['topics']} topics, {size['services']} services, "
                f"{size['actions']} actions")  # fmt: skip
+    relays = found.get("relays") or []
+    click.echo(f"  relays: {len(relays)}" + (f" ({', '.join(relays)})" if relays else ""))
