@@ -23,6 +23,7 @@ PLANNED_TREE: Mapping[str, frozenset[str] | None] = {
     "service": frozenset({"list", "type", "info", "uri", "find", "call", "echo"}),
     "action": frozenset({"list", "info", "type", "find", "send-goal", "send_goal", "cancel"}),
     "bag": frozenset({"info", "play", "record", "convert", "echo", "filter", "reindex", "burst"}),
+    "daemon": frozenset({"start", "stop", "status"}),
     "cheatsheet": None,
 }
 
