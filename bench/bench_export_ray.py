@@ -11,6 +11,7 @@ column-wise: ~1 M msg/s on one core) and tf2_msgs/TFMessage (a sequence of messa
 The Ray head for --ray-address is started here (`ray start --head --block`, loopback only, token auth, no
 dashboard, no usage statistics; its listeners checked with `ss`) and stopped by its own pid at the end.
 Every command is a new process; medians of --runs (wall; CPU of the driver and the children it reaped).
+"cores free": two busy loops for 4 s, their CPU seconds over 4 (2.00 on an idle machine).
 Peak RSS: /proc sampled every 50 ms over the command's process tree and the head's workers: the driver's,
 and the largest worker's (a local worker process, or a Ray `ray::` worker; Ray's own daemons left out).
 
@@ -219,6 +220,22 @@ class Head:
         self.proc = None
 
 
+def _spin(seconds: float) -> float:
+    start, cpu = time.perf_counter(), time.process_time()
+    while time.perf_counter() - start < seconds:
+        pass
+    return time.process_time() - cpu
+
+
+def cores_free(seconds: float = 4.0) -> float:
+    """How many cores the machine gives two busy processes now (2.0 on an idle 2-core machine): what every
+    ratio of a parallel run is bounded by when other work shares the machine."""
+    import multiprocessing
+
+    with multiprocessing.get_context("fork").Pool(2) as pool:
+        return sum(pool.map(_spin, [seconds, seconds])) / seconds
+
+
 def table(rows: list[tuple[str, str, list[float]]], messages_count: int) -> None:
     print("| bags | engine | wall s | CPU s | vs -j 1 (wall) | msg/s (wall) | driver MiB | worker MiB |")
     print("|---|---|---|---|---|---|---|---|")
@@ -242,7 +259,8 @@ def main() -> None:
     args = parser.parse_args()
     env = {k: v for k, v in os.environ.items() if not k.startswith("RAY_")}
     env.update(RAY_USAGE_STATS_ENABLED="0", AWS_EC2_METADATA_DISABLED="true")
-    print(f"{os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.1f} at start")
+    load = os.getloadavg()[0]
+    print(f"{os.cpu_count()} CPUs, load average {load:.1f}, {cores_free():.2f} cores free at start")
     with tempfile.TemporaryDirectory(prefix="bench-ray-", dir=args.tmp) as tmp_name:
         tmp = Path(tmp_name)
         head = Head(env, tmp)
@@ -250,7 +268,7 @@ def main() -> None:
             run(args, env, head, tmp)
         finally:
             head.stop()
-    print(f"\nload average {os.getloadavg()[0]:.1f} at the end")
+    print(f"\nload average {os.getloadavg()[0]:.1f}, {cores_free():.2f} cores free at the end")
 
 
 def run(args: argparse.Namespace, env: dict[str, str], head: Head, tmp: Path) -> None:
