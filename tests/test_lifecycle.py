@@ -8,6 +8,7 @@ import os
 import subprocess
 import time
 from collections.abc import Callable, Iterator
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import pytest
@@ -107,6 +108,9 @@ NAMED_FORMS = [
     ["list", "test_lifecycle_node"],
     ["list", "--include-hidden-nodes", HIDDEN, "-a"],
     ["list", HIDDEN, "-a"],
+]
+# each asks for a transition (refused: none may move a node), so one after the other, after the reads
+SET_FORMS = [
     ["set", NODE, "noop"],
     ["set", "/nonexistent_test_lifecycle_node", "configure"],
     ["set", HIDDEN, "configure"],
@@ -118,30 +122,42 @@ def test_lifecycle_forms_print_what_ros2_prints(
     served_tool: ServedTool, ros2: Ros2, start_script: StartScript, backend: str
 ) -> None:
     """ros2lifecycle's own test cases (its test/test_cli.py), run by both tools on the same nodes, each
-    through its daemon (rostool's direct forms: test_set_moves_the_node_through_its_states)."""
+    through its daemon (rostool's direct forms: test_set_moves_the_node_through_its_states). The reads run
+    side by side (a rostool on rclpy is a node, but no lifecycle node: no form lists it; a lifecycle
+    service's requests are empty, so while no node moves all its replies are the same, and one that
+    rostool's DDS client of the Fast DDS node takes from another caller prints alike: services.py)."""
     tool = served_tool
-    start_script("lifecycle_peer.py")
-    start_script("lifecycle_peer.py", "--name", HIDDEN[1:])
+    with ThreadPoolExecutor() as pool:  # the two nodes start side by side
+        list(pool.map(lambda args: start_script("lifecycle_peer.py", *args), [[], ["--name", HIDDEN[1:]]]))
     ros2_sees(ros2, [NODE, HIDDEN])
     tool.daemon.ready()
     # the two lifecycle nodes and the real ros2's own daemon node
     assert wait_until(lambda: tool.daemon.graph_size()["nodes"] == 3, timeout=20)
-    for args in LISTING_FORMS:
-        same_as_ros2(tool, ros2, ["lifecycle", *args], attempts=3 if backend == "rclpy" else 1)
-    for args in NAMED_FORMS:
+    attempts = 3 if backend == "rclpy" else 1
+    with ThreadPoolExecutor(max_workers=4) as pool:
+        listed_run = pool.submit(tool, ["lifecycle", "list", NODE])
+        compared = [pool.submit(same_as_ros2, tool, ros2, ["lifecycle", *args], attempts)
+                    for args in LISTING_FORMS]  # fmt: skip
+        compared += [pool.submit(same_as_ros2, tool, ros2, ["lifecycle", *args]) for args in NAMED_FORMS]
+    for done in compared:
+        done.result()
+    for args in SET_FORMS:
         same_as_ros2(tool, ros2, ["lifecycle", *args])
-    listed = tool(["lifecycle", "list", NODE]).stdout
+    listed = listed_run.result().stdout
     assert listed == "- configure [1]\n\tStart: unconfigured\n\tGoal: configuring\n" + (
         "- shutdown [5]\n\tStart: unconfigured\n\tGoal: shuttingdown\n"
     )
 
 
 def test_set_moves_the_node_through_its_states(tool: Tool, ros2: Ros2, start_script: StartScript) -> None:
-    """set moves the real node; nodes, list, get and set asked directly (no daemon) on both backends."""
+    """set moves the real node; nodes, list, get and set asked directly (no daemon) on both backends. The
+    sets one after the other; the reads between two sets side by side."""
     peer = start_script("lifecycle_peer.py")
     ros2_sees(ros2, [NODE])
-    for args in (["nodes"], ["list", NODE]):
-        same_as_ros2(tool, ros2, ["lifecycle", *args], attempts=3)
+    with ThreadPoolExecutor() as pool:
+        for done in [pool.submit(same_as_ros2, tool, ros2, ["lifecycle", *args], 3)
+                     for args in (["nodes"], ["list", NODE])]:  # fmt: skip
+            done.result()
     steps = [("configure", "inactive [2]"), ("3", "active [3]"), ("deactivate", "inactive [2]"),
              ("cleanup", "unconfigured [1]")]  # fmt: skip
     for number, (transition, state) in enumerate(steps, start=1):
@@ -149,8 +165,10 @@ def test_set_moves_the_node_through_its_states(tool: Tool, ros2: Ros2, start_scr
         assert (done.stdout, done.returncode) == ("Transitioning successful\n", 0), done.stderr
         peer.wait_for("state", lambda _e, n=number: len(peer.of("state")) >= n)
         assert peer.of("state")[-1]["label"] == state.split()[0]
-        assert ros2(["lifecycle", "get", NODE]).stdout == state + "\n"
-        assert tool(["lifecycle", "get", NODE]).stdout == state + "\n"
+        with ThreadPoolExecutor() as pool:
+            theirs, ours = pool.map(lambda run: run(["lifecycle", "get", NODE]), (ros2, tool))
+        assert theirs.stdout == state + "\n"
+        assert ours.stdout == state + "\n"
 
 
 def test_lifecycle_needs_a_ros2_graph() -> None:

@@ -12,9 +12,10 @@ from __future__ import annotations
 
 import json
 import signal
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, TypeVar
 
 from tests.ros2_peers import RclpyPeer
 from tests.support import stop
@@ -25,6 +26,7 @@ if TYPE_CHECKING:
 Start = Callable[..., RclpyPeer]
 pytest_plugins = ("tests.ros2_backends",)  # the `tool`, `tool_popen` and `backend` fixtures
 CALLS = 3  # fresh rostool processes per check
+T = TypeVar("T")
 
 
 def test_service_call_reaches_the_real_server(start_peer: Start, tool: Tool) -> None:
@@ -61,36 +63,66 @@ def test_service_call_without_a_server_ends_in_one_line(start_peer: Start, tool:
     assert len(lines) == 1 and "/nothing" in lines[0], called.stderr
 
 
-def test_parameters_of_a_real_node(start_peer: Start, tool: Tool, tmp_path: Path) -> None:
+def in_lanes(
+    run: Callable[[list[str]], T], calls: Sequence[tuple[str | None, list[str]]], workers: int = 4
+) -> list[T]:
+    """run(args) of each (lane, args), side by side (`workers` at a time: more fresh participants at once
+    only make each one's discovery slower on two cores); the runs of one lane (not None) one after the other.
+    A lane is a service: rostool's DDS client of a Fast DDS server takes the first reply after its request,
+    which may be another client's if two call the server at once (rostool/graph/ros2/services.py)."""
+    lanes: dict[object, list[int]] = {}
+    for index, (lane, _args) in enumerate(calls):
+        lanes.setdefault(index if lane is None else lane, []).append(index)
+    results: dict[int, T] = {}
+
+    def run_lane(indexes: list[int]) -> None:
+        for index in indexes:
+            results[index] = run(calls[index][1])
+
+    with ThreadPoolExecutor(max_workers=min(workers, len(lanes))) as pool:
+        for done in [pool.submit(run_lane, indexes) for indexes in lanes.values()]:
+            done.result()
+    return [results[index] for index in range(len(calls))]
+
+
+def test_parameters_of_a_real_node(start_peer: Start, tool: Tool, tmp_path: Path, backend: str) -> None:
+    """Each change in order; the runs that only read (or change another parameter) side by side, on the
+    DDS backend one at a time per parameter service (see in_lanes)."""
+
+    def lane(service: str) -> str | None:
+        return service if backend == "dds" else None
+
     peer = start_peer("--name", "talker", "--params")
-    names = tool(["param", "list", "/talker"])
+    names, speed, ids, described = in_lanes(tool, [
+        (lane("list"), ["param", "list", "/talker"]), (lane("get"), ["param", "get", "/talker", "speed"]),
+        (lane("get"), ["param", "get", "/talker", "ids"]),
+        (lane("describe"), ["param", "describe", "/talker", "label"]),
+    ])  # fmt: skip
     assert names.returncode == 0, names.stderr
     listed = names.stdout.split()
     assert {"flag", "count", "speed", "label", "blob", "ids", "gains", "names", "use_sim_time"} <= set(listed)
-    assert tool(["param", "get", "/talker", "speed"]).stdout == "Double value is: 0.5\n"
-    assert tool(["param", "get", "/talker", "ids"]).stdout == "Integer values are: [1, 2, 3]\n"
+    assert speed.stdout == "Double value is: 0.5\n"
+    assert ids.stdout == "Integer values are: [1, 2, 3]\n"
+    assert "Parameter name: label" in described.stdout and "Type: string" in described.stdout
 
     changed = tool(["param", "set", "/talker", "speed", "0.75"])
     assert changed.stdout == "Set parameter successful\n", changed.stderr
     peer.wait_for("param", lambda e: e["name"] == "speed" and e["value"] == 0.75)  # the node's own view
-    assert tool(["param", "get", "/talker", "speed"]).stdout == "Double value is: 0.75\n"
-
-    described = tool(["param", "describe", "/talker", "label"]).stdout
-    assert "Parameter name: label" in described and "Type: string" in described
-
-    dumped = tool(["param", "dump", "/talker"])
+    speed, dumped = in_lanes(tool, [(lane("get"), ["param", "get", "/talker", "speed"]),
+                                    (lane("get"), ["param", "dump", "/talker"])])  # fmt: skip
+    assert speed.stdout == "Double value is: 0.75\n"
     assert dumped.returncode == 0, dumped.stderr
     assert "    speed: 0.75\n" in dumped.stdout and "    label: r2\n" in dumped.stdout
 
     params_file = tmp_path / "talker.yaml"
     params_file.write_text("/talker:\n  ros__parameters:\n    label: r3\n    count: 7\n")
-    loaded = tool(["param", "load", "/talker", str(params_file)])
+    # rclpy refuses to undeclare a declared parameter: rostool reports the node's reason (speed, which the
+    # load does not touch)
+    loaded, deleted = in_lanes(tool, [(lane("set"), ["param", "load", "/talker", str(params_file)]),
+                                      (lane("set"), ["param", "delete", "/talker", "speed"])])  # fmt: skip
     assert loaded.returncode == 0, loaded.stderr
     peer.wait_for("param", lambda e: e["name"] == "label" and e["value"] == "r3")
     peer.wait_for("param", lambda e: e["name"] == "count" and e["value"] == 7)
-
-    # rclpy refuses to undeclare a declared parameter: rostool reports the node's reason
-    deleted = tool(["param", "delete", "/talker", "speed"])
     assert deleted.returncode != 0
     (line,) = deleted.stderr_lines
     assert line.startswith("rostool: Deleting parameter failed: Static parameter cannot be undeclared"), line

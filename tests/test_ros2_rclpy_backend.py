@@ -14,6 +14,7 @@ import re
 import subprocess
 import sys
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import pytest
@@ -28,6 +29,7 @@ from tests.ros2_peers import (
     rostool_rclpy_popen,
 )
 from tests.support import Watched, rostool, stop, wait_until
+from tests.test_ros2_fastdds_rpc import in_lanes
 
 Start = Callable[..., RclpyPeer]
 
@@ -166,20 +168,28 @@ Tool = Callable[..., subprocess.CompletedProcess[str]]
 def test_topic_list_type_find_as_the_dds_backend(
     graph_env: dict[str, str], start_peer: Start, rclpy_tool: Tool
 ) -> None:
+    """Every run here only lists (a rostool rclpy node has no topics of its own): all side by side."""
     start_peer("--name", "talker", "--talk", "/chatter", "--listen", "/heard")
-    for _ in range(3):
-        listed = rclpy_tool("topic", "list")
-        assert "/chatter" in listed.stdout.split(), listed.stderr
     # node names only where the DDS backend waits for them too (its listing does not wait for Fast DDS's
     # ros_discovery_info, and may show _NODE_NAME_UNKNOWN_ where rmw knows the node)
-    for args in (["topic", "list", "-v"], ["topic", "type", "/chatter"],
-                 ["topic", "find", "std_msgs/msg/String"], ["topic", "info", "/chatter"]):  # fmt: skip
-        mine = rclpy_tool(*args)
+    compared = (["topic", "list", "-v"], ["topic", "type", "/chatter"],
+                ["topic", "find", "std_msgs/msg/String"], ["topic", "info", "/chatter"])  # fmt: skip
+    with ThreadPoolExecutor(max_workers=4) as pool:
+        lists = [pool.submit(rclpy_tool, "topic", "list") for _ in range(3)]
+        pairs = [(pool.submit(rclpy_tool, *args), pool.submit(rostool, args, graph_env)) for args in compared]
+        verbose = pool.submit(rclpy_tool, "topic", "list", "-v")
+        found = pool.submit(rclpy_tool, "topic", "find", "std_msgs/String")
+        as_json = pool.submit(rclpy_tool, "topic", "list", "--json")
+    for listing in lists:
+        listed = listing.result()
+        assert "/chatter" in listed.stdout.split(), listed.stderr
+    for args, (mine_run, theirs_run) in zip(compared, pairs, strict=True):
+        mine = mine_run.result()
         assert mine.returncode == 0, (args, mine.stderr)
-        assert mine.stdout == rostool(args, graph_env).stdout, args
-    assert " * /chatter [std_msgs/msg/String] 1 publisher" in rclpy_tool("topic", "list", "-v").stdout
-    assert rclpy_tool("topic", "find", "std_msgs/String").stdout == "/chatter\n/heard\n"
-    listed = {t["name"]: t for t in json.loads(rclpy_tool("topic", "list", "--json").stdout)}
+        assert mine.stdout == theirs_run.result().stdout, args
+    assert " * /chatter [std_msgs/msg/String] 1 publisher" in verbose.result().stdout
+    assert found.result().stdout == "/chatter\n/heard\n"
+    listed = {t["name"]: t for t in json.loads(as_json.result().stdout)}
     chatter = {"name": "/chatter", "type": "std_msgs/msg/String", "publishers": ["/talker"]}
     assert listed["/chatter"] == {**chatter, "subscribers": []}
     assert listed["/heard"]["subscribers"] == ["/talker"]
@@ -239,17 +249,19 @@ def test_hz_at_10_hz_and_1_khz(
     """hz agrees within 2 % with the rate the publisher itself measured: over the same seconds at 10 Hz, and
     over a burst of exactly 3000 messages at 1 kHz, of which hz must count every one (a Python publisher on
     a loaded machine does not keep exactly 1 kHz, and its rate drifts from one second to the next)."""
-    slow = start_peer("--name", "slow", "--talk", "/slow", "--rate", "10")
-    before = len(slow.of("published"))
-    out = rclpy_tool("topic", "hz", "/slow", "--json", "--duration", "5.2").stdout
-    reports = [json.loads(line) for line in out.splitlines()]
-    assert reports, out
-    during = slow.of("published")[before + 1 :]
-    true_rate = (during[-1]["count"] - during[0]["count"]) / (during[-1]["t"] - during[0]["t"])
-    assert abs(reports[-1]["rate"] - true_rate) / true_rate < 0.02, (true_rate, reports[-1])
-
+    # the 1 kHz hz starts first: its start-up and discovery overlap the 10 Hz window (its talker waits
+    # for it, and starts only after that window)
     hz = Watched(rostool_rclpy_popen(["topic", "hz", "/fast", "--json"], graph_env, tmp_path, distro))
     try:
+        slow = start_peer("--name", "slow", "--talk", "/slow", "--rate", "10")
+        before = len(slow.of("published"))
+        out = rclpy_tool("topic", "hz", "/slow", "--json", "--duration", "5.2").stdout
+        reports = [json.loads(line) for line in out.splitlines()]
+        assert reports, out
+        during = slow.of("published")[before + 1 :]
+        true_rate = (during[-1]["count"] - during[0]["count"]) / (during[-1]["t"] - during[0]["t"])
+        assert abs(reports[-1]["rate"] - true_rate) / true_rate < 0.02, (true_rate, reports[-1])
+
         fast = start_peer("--name", "fast", "--talk", "/fast", "--rate", "1000", "--depth", "1000",
                           "--count", "3000", "--subs", "1")  # fmt: skip
         sent = fast.wait_for("sent", timeout=60)
@@ -347,12 +359,11 @@ def test_a_type_rosbags_lacks_comes_from_the_class_rclpy_imports(
 
 
 def test_bad_input_on_a_real_graph(graph_env: dict[str, str], start_peer: Start, rclpy_tool: Tool) -> None:
+    """Each run fails before it changes anything: all side by side."""
     start_peer("--name", "talker", "--talk", "/chatter")
-    for args in (["node", "info", "/nobody"], ["topic", "echo", "/nothing", "--timeout", "1"]):
-        mine = one_error_line(rclpy_tool(*args, timeout=20))
-        assert mine == one_error_line(rostool(args, graph_env, timeout=20)), args  # the DDS backend's line
+    compared = (["node", "info", "/nobody"], ["topic", "echo", "/nothing", "--timeout", "1"])
     both_ways = ("source the workspace", "--ros2-backend dds")
-    for args, words in (
+    refused = (
         (["topic", "pub", "/chatter", "std_msgs/msg/Nope", "data: 1", "-1"], ("std_msgs/msg/Nope",)),
         (["topic", "pub", "/x", "nothere_msgs/msg/Thing", "a: 1", "-1"], ("'nothere_msgs'", *both_ways)),
         # example_interfaces is not in the peer venv: rclpy cannot import it, the DDS backend has it built in
@@ -361,8 +372,16 @@ def test_bad_input_on_a_real_graph(graph_env: dict[str, str], start_peer: Start,
         (["action", "send-goal", "/fib", "example_interfaces/action/Fibonacci", "{order: 1}"],
          ("'example_interfaces'", *both_ways)),
         (["param", "get", "/talker", "nope"], ("parameter not set: node /talker has no parameter nope",)),
-    ):  # fmt: skip
-        one_error_line(rclpy_tool(*args, timeout=20), *words)
+    )  # fmt: skip
+    with ThreadPoolExecutor(max_workers=4) as pool:
+        pairs = [(pool.submit(rclpy_tool, *args, timeout=20), pool.submit(rostool, args, graph_env, 20))
+                 for args in compared]  # fmt: skip
+        runs = [pool.submit(rclpy_tool, *args, timeout=20) for args, _words in refused]
+    for args, (mine, theirs) in zip(compared, pairs, strict=True):
+        # the DDS backend's line
+        assert one_error_line(mine.result()) == one_error_line(theirs.result()), args
+    for (_args, words), run in zip(refused, runs, strict=True):
+        one_error_line(run.result(), *words)
 
 
 def test_a_missing_rmw_library_is_one_line(graph_env: dict[str, str], tmp_path: Path, distro: str) -> None:
@@ -395,20 +414,32 @@ def test_a_missing_rmw_library_is_one_line(graph_env: dict[str, str], tmp_path: 
 def test_services_parameters_actions_print_as_the_dds_backend(
     graph_env: dict[str, str], start_peer: Start, rclpy_tool: Tool
 ) -> None:
-    """The same real node seen through rclpy and through rostool's DDS: the same text, GIDs and QoS too."""
+    """The same real node seen through rclpy and through rostool's DDS: the same text, GIDs and QoS too.
+    The runs only read: side by side, but the two of each param verb one after the other (in_lanes), and
+    `service info -v` on its own after them (seen on Kilted: rclpy showed the Fast DDS server's endpoints
+    as KEEP_LAST (1), where alone it shows UNKNOWN as the DDS backend does, while another rclpy rostool
+    started beside it)."""
     start_peer("--name", "robot", "--service", "/flag", "--params", "--action", "/fib")
-    for args in (
+    compared = (
         # --timeout: the DDS backend learns Fast DDS's node names on its 3 s heartbeat
-        ["service", "list", "-t"], ["service", "info", "/flag", "-v"], ["action", "list", "-t"],
-        ["param", "dump", "/robot", "--timeout", "5"],
-        ["param", "describe", "/robot", "speed", "ids", "--timeout", "5"],
-    ):  # fmt: skip
-        mine = rclpy_tool(*args)
+        (None, ["service", "list", "-t"]), (None, ["action", "list", "-t"]),
+        ("dump", ["param", "dump", "/robot", "--timeout", "5"]),
+        ("describe", ["param", "describe", "/robot", "speed", "ids", "--timeout", "5"]),
+    )  # fmt: skip
+
+    def run(args: list[str]) -> subprocess.CompletedProcess[str]:
+        return rostool(args[1:], graph_env) if args[0] == "dds" else rclpy_tool(*args[1:])
+
+    calls = [(lane, [backend, *args]) for lane, args in compared for backend in ("rclpy", "dds")]
+    *results, action_info = in_lanes(run, [*calls, (None, ["rclpy", "action", "info", "/fib", "-t"])])
+    alone = ["service", "info", "/flag", "-v"]
+    results += [rclpy_tool(*alone), rostool(alone, graph_env)]
+    checked = [*(args for _lane, args in compared), alone]
+    for args, mine, theirs in zip(checked, results[::2], results[1::2], strict=True):
         assert mine.returncode == 0, (args, mine.stderr)
-        theirs = rostool(args, graph_env)
         assert mine.stdout == theirs.stdout, (args, theirs.stderr)
     # the node by name (the DDS backend may show _NODE_NAME_UNKNOWN_ until Fast DDS names its nodes)
-    info = rclpy_tool("action", "info", "/fib", "-t").stdout.splitlines()
+    info = action_info.stdout.splitlines()
     assert info[info.index("Action servers: 1") + 1] == "    /robot [test_msgs/action/Fibonacci]", info
 
 

@@ -6,20 +6,25 @@ test_verb_list.py, test_verb_get.py, test_verb_set.py, test_verb_dump.py, test_v
 test_timeout_alias.py), taken as facts; the graph is rebuilt from tests/rclpy_peer.py: /param_node and
 /_hidden_param_node declare test/param_node.py's parameters, /foo/test_node test/fixtures/parameter_node.py's.
 Where rclpy of Jazzy differs from the ros2cli test's era, the case says so next to its expectation.
+
+The cases ask as users run rostool, through a warm graph daemon of the test's own (node names from it, the
+parameter services from the verb's own discovery); the "node not found" cases ask directly
+(ROSTOOL_NO_DAEMON=1), as do test_ros2_fastdds_rpc.py's test_parameters_of_a_real_node on both backends.
+Cases that change no parameter run side by side (`Early`, which says how).
 """
 
 from __future__ import annotations
 
-import time
-from concurrent.futures import ThreadPoolExecutor
+from collections.abc import Sequence
+from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
 
 import pytest
 import yaml
 
-from tests.ros2_peers import RclpyPeer
-from tests.support import rostool
+from tests.ros2_peers import RclpyPeer, WarmDaemon, peer_env
+from tests.support import rostool, wait_until
 from tests.test_ros2cli_forms import Cases, Start
 
 GET_VERB_PARAM_VALUES = {
@@ -61,17 +66,45 @@ def param(env: dict[str, str], *args: str) -> Any:
 
 
 class Early:
-    """`param` runs started together at the test's start and read where the test checks them: the cases of
-    a node that is not there each wait out discovery's whole settle window, so side by side the test waits
-    it about once. Only read-only cases (they change no parameter)."""
+    """`param` runs started together and read where the test checks them: each waits for discovery (a node
+    that is not there, the whole settle window), so side by side the test waits about once per round. Only
+    cases that change no parameter. The runs that call one node's parameter services go in one of `lanes`,
+    one after the other: rostool's DDS client of a Fast DDS server takes the first reply after its request,
+    which may be another client's if two call that server at once (rostool/graph/ros2/services.py). Lanes
+    run side by side, each of `calls` is a lane of its own, and `last` (runs that call every node) runs
+    after every lane."""
 
-    def __init__(self, env: dict[str, str], *calls: tuple[str, ...]) -> None:
-        self._pool = ThreadPoolExecutor(max_workers=3)
-        self._started = {call: self._pool.submit(param, env, *call) for call in calls}
-        self._pool.shutdown(wait=False)
+    Call = tuple[str, ...]
+
+    def __init__(
+        self,
+        env: dict[str, str],
+        *calls: Call,
+        lanes: Sequence[Sequence[Call]] = (),
+        last: Sequence[Call] = (),
+        workers: int = 3,
+    ) -> None:
+        every = [*((call,) for call in calls), *lanes]
+        self._results: dict[Early.Call, Any] = {}
+        pool = ThreadPoolExecutor(max_workers=workers)
+        running = [pool.submit(self._run, env, lane) for lane in every]
+        after = pool.submit(self._after, env, running, last)
+        self._started = {call: future for lane, future in zip(every, running, strict=True) for call in lane}
+        self._started.update({call: after for call in last})
+        pool.shutdown(wait=False)
+
+    def _run(self, env: dict[str, str], lane: Sequence[Call]) -> None:
+        for call in lane:
+            self._results[call] = param(env, *call)
+
+    def _after(self, env: dict[str, str], running: list[Future[None]], last: Sequence[Call]) -> None:
+        for lane in running:
+            lane.result()
+        self._run(env, last)
 
     def __call__(self, *call: str) -> Any:
-        return self._started[call].result(timeout=120)
+        self._started[call].result(timeout=300)
+        return self._results[call]
 
 
 def not_found(result: Any) -> bool:
@@ -79,84 +112,120 @@ def not_found(result: Any) -> bool:
 
 
 @pytest.fixture
-def param_graph(graph_env: dict[str, str], start_peer: Start) -> dict[str, RclpyPeer]:
-    peers = {
-        "param_node": start_peer("--name", "param_node", "--ros2cli-params", "param_node"),
-        "hidden": start_peer("--name", "_hidden_param_node", "--ros2cli-params", "param_node"),
-        "test_node": start_peer(
-            "--name", "test_node", "--namespace", "/foo", "--ros2cli-params", "parameter_node"
-        ),
+def param_graph(
+    warm_daemon: WarmDaemon, graph_env: dict[str, str], start_peer: Start, tmp_path: Path
+) -> dict[str, RclpyPeer]:
+    """The three parameter nodes, started side by side; the test's warm daemon knows all three."""
+    roles = {
+        "param_node": ("--name", "param_node", "--ros2cli-params", "param_node"),
+        "hidden": ("--name", "_hidden_param_node", "--ros2cli-params", "param_node"),
+        "test_node": ("--name", "test_node", "--namespace", "/foo", "--ros2cli-params", "parameter_node"),
     }
-    time.sleep(1.0)
+    peer_env(graph_env, tmp_path)  # writes the peers' profile once, before the threads read it
+    with ThreadPoolExecutor(max_workers=len(roles)) as pool:
+        started = {key: pool.submit(start_peer, *args) for key, args in roles.items()}
+    peers = {key: future.result() for key, future in started.items()}
+    warm_daemon.ready()
+    assert wait_until(lambda: warm_daemon.graph_size()["nodes"] == len(peers), timeout=20)
     return peers
 
 
 @pytest.mark.parametrize("distro", ["jazzy"])  # the parameter services are rclpy's, the same in Kilted
-def test_param_get_list_describe(graph_env: dict[str, str], param_graph: dict[str, RclpyPeer]) -> None:
-    env, c = graph_env, Cases()
-    early = Early(env, ("get", "/foo/nonexistent_node", "test_param"), ("list", "/nonexistent_node"),
-                  ("list", "/_hidden_param_node"), ("describe", "/foo/nonexistent_node", "int_param"),
-                  ("list", "invalid_node"), ("list", "invalid_ns/test_node"))  # fmt: skip
+def test_param_get_list_describe(
+    graph_env: dict[str, str], warm_daemon: WarmDaemon, param_graph: dict[str, RclpyPeer]
+) -> None:
+    """Every case here only reads: side by side (see Early), the node-not-found ones directly."""
+    c = Cases()
+    direct = Early(graph_env, ("get", "/foo/nonexistent_node", "test_param"), ("list", "/nonexistent_node"),
+                   ("list", "/_hidden_param_node"), ("describe", "/foo/nonexistent_node", "int_param"),
+                   ("list", "invalid_node"), ("list", "invalid_ns/test_node"))  # fmt: skip
+    served = Early(
+        warm_daemon.env,
+        lanes=[
+            [
+                *(("get", "/param_node", key) for key in GET_VERB_PARAM_VALUES),
+                *(
+                    ("get", "/param_node", key, "--hide-type")
+                    for key in ("int_array", "parameter_with_no_value")
+                ),
+                ("list", "/param_node"),
+                ("describe", "/param_node", *DESCRIBE_TYPES),
+            ],
+            [
+                ("get", "/_hidden_param_node", "test_param"),
+                ("get", "/_hidden_param_node", "int_param", "--include-hidden-nodes"),
+                ("list", "/_hidden_param_node", "--include-hidden-nodes"),
+            ],
+            [
+                ("list", "--param-prefixes=foo", TEST_NODE),
+                ("list", TEST_NODE, "--service-timeout", "10"),
+                ("list", TEST_NODE, "--service-timeout", "10", "--filter", "bool.*"),
+                ("list", "-t", TEST_NODE, "--timeout", "2.5"),
+            ],
+        ],
+        last=[("get", "use_sim_time"), ("get", "use_sim_time", "--hide-type"), ("get", "nonexistent_param")],
+        workers=4,
+    )
     for key, expected in GET_VERB_PARAM_VALUES.items():
-        got = param(env, "get", "/param_node", key)
+        got = served("get", "/param_node", key)
         c.check(f"test_get_verb[{key}]", got.returncode == 0 and got.stdout == expected, got)
     for key in ("int_array", "parameter_with_no_value"):
-        got = param(env, "get", "/param_node", key, "--hide-type")
+        got = served("get", "/param_node", key, "--hide-type")
         shown = (
             GET_VERB_PARAM_VALUES[key].split(":")[1].strip() if ":" in GET_VERB_PARAM_VALUES[key] else "None"
         )
         c.check(f"test_get_verb_hide_type[{key}]", got.returncode == 0 and got.stdout == shown + "\n", got)
-    c.check("test_get_nonexistent_node", not_found(early("get", "/foo/nonexistent_node", "test_param")))
+    c.check("test_get_nonexistent_node", not_found(direct("get", "/foo/nonexistent_node", "test_param")))
     c.check(
         "test_get_hidden_node_with_no_hidden_argument",
-        not_found(param(env, "get", "/_hidden_param_node", "test_param")),
+        not_found(served("get", "/_hidden_param_node", "test_param")),
     )
-    got = param(env, "get", "/_hidden_param_node", "int_param", "--include-hidden-nodes")
+    got = served("get", "/_hidden_param_node", "int_param", "--include-hidden-nodes")
     c.check("test_get_hidden_node_with_hidden_argument", got.stdout == "Integer value is: 42\n", got)
-    got = param(env, "list", "/param_node")
+    got = served("list", "/param_node")
     c.check("test_list_existing_node", got.returncode == 0 and got.stdout == PARAM_NODE_LIST, got)
-    c.check("test_list_nonexistent_node", not_found(early("list", "/nonexistent_node")))
-    c.check("test_list_hidden_existing_node_no_hidden_flag", not_found(early("list", "/_hidden_param_node")))
-    got = param(env, "list", "/_hidden_param_node", "--include-hidden-nodes")
+    c.check("test_list_nonexistent_node", not_found(direct("list", "/nonexistent_node")))
+    c.check("test_list_hidden_existing_node_no_hidden_flag", not_found(direct("list", "/_hidden_param_node")))
+    got = served("list", "/_hidden_param_node", "--include-hidden-nodes")
     c.check("test_list_hidden_existing_node_hidden_flag", got.stdout == PARAM_NODE_LIST, got)
     # ros2cli's case lists 'bool' for --param-prefixes=bool; rclpy of Jazzy matches PREFIX or PREFIX.* only
-    got = param(env, "list", "--param-prefixes=foo", TEST_NODE)
+    got = served("list", "--param-prefixes=foo", TEST_NODE)
     c.check(
         "test_list_existing_node_bool_prefix (prefix foo)",
         got.stdout == "  foo.bar.str_param\n  foo.str_param\n",
         got,
     )
-    got = param(env, "describe", "/param_node", *DESCRIBE_TYPES)
+    got = served("describe", "/param_node", *DESCRIBE_TYPES)
     expected = "".join(
         f"Parameter name: {k}\n  Type: {t}\n  Constraints:\n" for k, t in DESCRIBE_TYPES.items()
     )
     c.check("test_describe_existing_node_all_params", got.stdout == expected, got)
     c.check(
         "test_describe_nonexistent_node",
-        not_found(early("describe", "/foo/nonexistent_node", "int_param")),
+        not_found(direct("describe", "/foo/nonexistent_node", "int_param")),
     )
-    c.check("test_verb_list_invalid_node", not_found(early("list", "invalid_node"))
-            and not_found(early("list", "invalid_ns/test_node")))  # fmt: skip
-    got = param(env, "list", TEST_NODE, "--service-timeout", "10").stdout.splitlines()
+    c.check("test_verb_list_invalid_node", not_found(direct("list", "invalid_node"))
+            and not_found(direct("list", "invalid_ns/test_node")))  # fmt: skip
+    got = served("list", TEST_NODE, "--service-timeout", "10").stdout.splitlines()
     wanted = ["  bool_array_param", "  bool_param", "  double_array_param", "  double_param", "  foo.bar.str_param",
               "  foo.str_param", "  int_array_param", "  int_param", "  start_type_description_service",
               "  str_array_param", "  str_param", "  use_sim_time"]  # fmt: skip
     c.check("test_verb_list", got == wanted, got)
-    got = param(env, "list", TEST_NODE, "--service-timeout", "10", "--filter", "bool.*")
+    got = served("list", TEST_NODE, "--service-timeout", "10", "--filter", "bool.*")
     c.check("test_verb_list_filter", got.stdout == "  bool_array_param\n  bool_param\n", got)
-    got = param(env, "list", "-t", TEST_NODE, "--timeout", "2.5")
+    got = served("list", "-t", TEST_NODE, "--timeout", "2.5")
     c.check("test_timeout_alias (--timeout) and --param-type", got.returncode == 0
             and "  int_param (type: integer)" in got.stdout.splitlines(), got)  # fmt: skip
-    got = param(env, "get", "use_sim_time")
+    got = served("get", "use_sim_time")
     c.check("test_verb_get_all_nodes", all(n in got.stdout for n in ("/param_node", TEST_NODE))
             and "Boolean value is:" in got.stdout and "/_hidden_param_node" not in got.stdout, got)  # fmt: skip
-    got = param(env, "get", "use_sim_time", "--hide-type")
+    got = served("get", "use_sim_time", "--hide-type")
     c.check(
         "test_verb_get_all_nodes_hide_type",
         TEST_NODE in got.stdout and "Boolean value is:" not in got.stdout,
         got,
     )
-    got = param(env, "get", "nonexistent_param")
+    got = served("get", "nonexistent_param")
     c.check("test_verb_get_all_nodes_nonexistent_param", got.returncode == 0
             and "Parameter 'nonexistent_param' not set on any node" in got.stdout, got)  # fmt: skip
     c.done()
@@ -164,10 +233,12 @@ def test_param_get_list_describe(graph_env: dict[str, str], param_graph: dict[st
 
 @pytest.mark.parametrize("distro", ["jazzy"])
 def test_param_set_dump_load(
-    graph_env: dict[str, str], param_graph: dict[str, RclpyPeer], tmp_path: Path
+    graph_env: dict[str, str], warm_daemon: WarmDaemon, param_graph: dict[str, RclpyPeer], tmp_path: Path
 ) -> None:
-    env, c = graph_env, Cases()
-    early = Early(env, ("set", "/nonexistent_node", "bool_param", "true"), ("dump", "invalid_node"),
+    """One case after the other (they change /foo/test_node's parameters and read them back), but the
+    node-not-found ones, directly and side by side."""
+    env, c = warm_daemon.env, Cases()
+    early = Early(graph_env, ("set", "/nonexistent_node", "bool_param", "true"), ("dump", "invalid_node"),
                   ("dump", "invalid_ns/test_node"))  # fmt: skip
     got = param(env, "set", TEST_NODE, "bool_param", "false")
     c.check(
