@@ -48,8 +48,10 @@ def test_service_call_reaches_the_real_server(start_peer: Start, tool: Tool) -> 
 
 def test_service_type_list_and_find(start_peer: Start, tool: Tool) -> None:
     start_peer("--name", "flags", "--service", "/set_flag")
-    assert tool(["service", "type", "/set_flag"]).stdout == "std_srvs/srv/SetBool\n"
-    listed = tool(["service", "list", "-t"]).stdout.splitlines()
+    reads = [(None, ["service", "type", "/set_flag"]), (None, ["service", "list", "-t"])]
+    typed, listing = in_lanes(tool, reads)  # side by side: both only list
+    assert typed.stdout == "std_srvs/srv/SetBool\n"
+    listed = listing.stdout.splitlines()
     assert "/set_flag [std_srvs/srv/SetBool]" in listed
     assert "/flags/list_parameters [rcl_interfaces/srv/ListParameters]" in listed
 
@@ -199,9 +201,10 @@ def test_action_cancel_verb_reaches_the_server(start_peer: Start, tool: Tool, to
 
 def test_action_list_and_info_name_the_real_server(start_peer: Start, tool: Tool) -> None:
     start_peer("--name", "fib", "--action", "/fibonacci")
-    listed = tool(["action", "list", "-t"])
+    reads = [(None, ["action", "list", "-t"]), (None, ["action", "info", "/fibonacci"])]
+    listed, described = in_lanes(tool, reads)  # side by side: both only list
     assert listed.stdout.splitlines() == ["/fibonacci [test_msgs/action/Fibonacci]"], listed.stderr
-    info = tool(["action", "info", "/fibonacci"]).stdout.splitlines()
+    info = described.stdout.splitlines()
     assert info[0] == "Action: /fibonacci"
     assert info[info.index("Action servers: 1") + 1] == "    /fib"  # the node, once it has named itself
     assert "Action clients: 0" in info
