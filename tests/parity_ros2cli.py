@@ -18,6 +18,7 @@ import os
 import re
 import subprocess
 import sys
+import threading
 import time
 from collections import Counter
 from collections.abc import Callable, Iterator
@@ -120,6 +121,9 @@ class Case:
     timeout: float = 30.0
     name: str = ""  # how the results name it, when its arguments hold a temporary path
     served: bool = True  # a listing: answered by rostool's daemon (False: a count that would include it)
+    # ros2 ARGS run every second while the tools wait, for a case that needs an event to print (a
+    # parameter set for /parameter_events): each tool gets one however late it subscribed
+    poke: tuple[str, ...] = ()
     stdin: str | None = None
 
     @property
@@ -230,13 +234,23 @@ class ParityGraph:
         if case.graph:
             runs = [job() for job in jobs]
         else:
-            with ThreadPoolExecutor(len(jobs)) as pool:
-                runs = list(pool.map(lambda job: job(), jobs))
+            with ThreadPoolExecutor(len(jobs) + 1) as pool:
+                done = threading.Event()
+                if case.poke:
+                    pool.submit(self._poke, list(case.poke), done)
+                try:
+                    runs = list(pool.map(lambda job: job(), jobs))
+                finally:
+                    done.set()
         outcome = Outcome(case, runs[0], dict(zip(order, runs[1:3], strict=True)))
         if direct:
             outcome.direct = dict(zip(order, runs[3:], strict=True))
         self.outcomes.append(outcome)
         return outcome
+
+    def _poke(self, args: list[str], done: threading.Event) -> None:
+        while not done.wait(1.0):
+            self.ros2(args)
 
     def warm_up(self, ready: Callable[[ParityGraph], bool]) -> None:
         """Start ros2's daemon and rostool's (one per backend) and wait until each has seen the whole graph

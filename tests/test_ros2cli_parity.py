@@ -201,6 +201,7 @@ CASES = [
         "--no-arr",
         "/parameter_events",
         normalize=digits_zeroed,
+        poke=("param", "set", "/parity_server", "speed", "0.5"),  # its own value: an event, nothing changed
     ),
     case("topic echo", "--csv", "topic", "echo", "--once", "--csv", "/stamped", normalize=digits_zeroed),
     case(
