@@ -143,6 +143,7 @@ class RclpyGraph(Ros2Base):
         last = self._snapshot()
         baseline = {name for name, _types in last[1]}  # this node's own topics (/parameter_events)
         changed = started
+        floor = self._settle_floor()
         while True:
             now = time.monotonic()
             found = bool(last[0]) or bool({name for name, _types in last[1]} - baseline)
@@ -151,7 +152,7 @@ class RclpyGraph(Ros2Base):
             # endpoints may come before their node's name (rmw learns names from ros_discovery_info), and a
             # hidden node alone (a graph daemon's, ros2cli's) is often found before the others
             named = any(not hidden_name(self.full_name(n, ns)) for n, ns in last[0])
-            quiet = named and now - changed >= GRAPH_QUIET_SECONDS and now - started >= self._settle_floor()
+            quiet = named and now - changed >= GRAPH_QUIET_SECONDS and now - started >= floor
             if found and (self._settled or quiet or now - started >= SETTLE_MAX_SECONDS):
                 self._settled = True
                 return True
