@@ -26,7 +26,7 @@ if TYPE_CHECKING:
     from rostool.graph.base import GoalOutcome, GoalWatcher, OnError, OnMessage, Subscription
     from rostool.graph.rclpy.context import RclpyContext
     from rostool.graph.rclpy.services import RclpyServiceClient, RclpyServiceServer
-    from rostool.graph.ros2_base.qos import QosProfile
+    from rostool.graph.ros2_base.qos import QosProfile, QosRequest
     from rostool.graph.ros2_base.transport import ServiceEndpoint, Writer
     from rostool.interfaces.ros2_types import Ros2Types
 
@@ -305,10 +305,13 @@ class RclpyGraph(Ros2Base):
         return node in {self.full_name(n, ns) for n, ns in self.node_pairs()}
 
     # --- topics -------------------------------------------------------------------------------
-    def _subscription(self, topic: str, on_message: OnMessage, on_error: OnError) -> Subscription:
+    def _subscription(
+        self, topic: str, on_message: OnMessage, on_error: OnError,
+        request: QosRequest | None = None, warn: Callable[[str], None] | None = None,
+    ) -> Subscription:  # fmt: skip
         from rostool.graph.rclpy.subscription import RclpySubscription
 
-        return RclpySubscription(self, topic, on_message, on_error)
+        return RclpySubscription(self, topic, on_message, on_error, request, warn)
 
     def _writer(self, topic: str, store_name: str, profile: QosProfile) -> Writer:
         from rostool.graph.rclpy.qos import to_rclpy

@@ -35,7 +35,7 @@ if TYPE_CHECKING:
     from rostool.graph.base import GoalOutcome, GoalWatcher, OnError, OnMessage, Subscription
     from rostool.graph.ros2.services import ServiceClient, ServiceServer
     from rostool.graph.ros2.type_description import TypeDescriptionServer
-    from rostool.graph.ros2_base.qos import QosProfile
+    from rostool.graph.ros2_base.qos import QosProfile, QosRequest
     from rostool.graph.ros2_base.transport import Writer
 
 SETTLE_MAX_SECONDS = 3.0  # listing verbs: how long an empty graph is given before "no participants"
@@ -198,8 +198,11 @@ class Ros2Graph(Ros2Base):
         return any(entry.full_name == node for entry in self.session.cache.node_entries())
 
     # --- topics -------------------------------------------------------------------------------
-    def _subscription(self, topic: str, on_message: OnMessage, on_error: OnError) -> Subscription:
-        return DdsSubscription(self, topic, on_message, on_error)
+    def _subscription(
+        self, topic: str, on_message: OnMessage, on_error: OnError,
+        request: QosRequest | None = None, warn: Callable[[str], None] | None = None,
+    ) -> Subscription:  # fmt: skip
+        return DdsSubscription(self, topic, on_message, on_error, request, warn)
 
     def store_name(self, type_name: str) -> str:
         return self.types.store_name(type_name)

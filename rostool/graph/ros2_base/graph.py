@@ -116,7 +116,11 @@ class Ros2Base:
     def _writer(self, topic: str, store_name: str, profile: QosProfile) -> Writer:
         raise NotImplementedError
 
-    def _subscription(self, topic: str, on_message: OnMessage, on_error: OnError) -> Subscription:
+    def _subscription(
+        self, topic: str, on_message: OnMessage, on_error: OnError,
+        request: QosRequest | None = None, warn: Callable[[str], None] | None = None,
+    ) -> Subscription:  # fmt: skip
+        """The transport's subscription; `request` and `warn` are the graph's unless given."""
         raise NotImplementedError
 
     def _service_server(self, service: str, srv_type: str, answer: Callable[[Any], Any]) -> ServedService:

@@ -3,7 +3,6 @@ each client it relays a topic to (graph/daemon/relay_server.py), each with the Q
 
 from __future__ import annotations
 
-import threading
 from collections.abc import Callable
 from typing import TYPE_CHECKING
 
@@ -14,8 +13,6 @@ if TYPE_CHECKING:
     from rostool.graph.ros2_base.graph import Ros2Base
     from rostool.graph.ros2_base.qos import QosRequest
 
-_LENT = threading.Lock()  # one subscription at a time borrows the graph's request and warn
-
 
 def subscribe_for(
     graph: Ros2Base, topic: str, request: QosRequest, warn: Callable[[str], None], on_message: OnMessage,
@@ -24,10 +21,4 @@ def subscribe_for(
     """A subscription of `graph` that reads with `request` and warns through `warn`; the caller closes it
     (the graph does not keep it)."""
     graph._start()
-    with _LENT:  # a subscription takes its graph's request and warn when it is made
-        saved = graph.qos_request, graph.warn
-        graph.qos_request, graph.warn = request, warn
-        try:
-            return graph._subscription(resolve(topic), on_message, on_error)
-        finally:
-            graph.qos_request, graph.warn = saved
+    return graph._subscription(resolve(topic), on_message, on_error, request, warn)

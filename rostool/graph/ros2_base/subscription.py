@@ -19,7 +19,7 @@ from rostool.graph.base import OnError, OnMessage, Received
 from rostool.graph.ros2_base.qos import adapt_to_publishers, serves
 
 if TYPE_CHECKING:
-    from rostool.graph.ros2_base.qos import QosProfile
+    from rostool.graph.ros2_base.qos import QosProfile, QosRequest
     from rostool.graph.ros2_base.transport import EndpointView, Ros2Host
 
 READER_CACHE_DEPTH = 1000  # a deep local history lets a busy moment pass without losing samples
@@ -33,17 +33,20 @@ MATCH_POLL = 0.005  # how often wait_matched looks at the reader's matched count
 class DrainingSubscription:
     thread_name = "ros2 sub"
 
-    def __init__(self, graph: Ros2Host, topic: str, on_message: OnMessage, on_error: OnError) -> None:
+    def __init__(
+        self, graph: Ros2Host, topic: str, on_message: OnMessage, on_error: OnError,
+        request: QosRequest | None = None, warn: Callable[[str], None] | None = None,
+    ) -> None:  # fmt: skip
         self._graph = graph
         self._topic = topic
         self._on_message = on_message
         self._on_error = on_error
         self._closed = threading.Event()
         self._expected: int | None = None  # the publishers discovery knew when the reader was made
-        # the QoS request and the warnings' place when it was made: a graph daemon's subscriptions each
-        # serve a client of its own (Ros2Base.subscribe_for)
-        self._request = graph.qos_request
-        self._warn = graph.warn
+        # the QoS request and the warnings' place: the graph's, unless given (a graph daemon's subscriptions
+        # each serve a client of its own: ros2_base/relaying.py)
+        self._request = graph.qos_request if request is None else request
+        self._warn = graph.warn if warn is None else warn
         self._setup()
         self._since = self._discovery_started()
         self._thread = threading.Thread(target=self._run, name=f"{self.thread_name} {topic}", daemon=True)
