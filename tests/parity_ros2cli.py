@@ -71,7 +71,8 @@ def without_observers(text: str) -> str:
     return "".join(line for line in text.splitlines(keepends=True) if not _OBSERVER.search(line))
 
 
-_OBSERVER = re.compile(r"\brostool_\d+\b|^/_rostool_daemon_\d+$", re.MULTILINE)
+_RUN_NODE = re.compile(r"\brostool_\d+\b")  # a rostool run on the rclpy backend, as a node
+_OBSERVER = re.compile(_RUN_NODE.pattern + r"|^/_rostool_daemon_\d+$", re.MULTILINE)
 
 
 def service_wait(text: str) -> str:
@@ -187,14 +188,15 @@ class ParityGraph:
         return _run(self.ros2_command(args), self.ros2_env, timeout, stdin)
 
     def ros2_steady(self, args: list[str], timeout: float = 30, stdin: str | None = None) -> Run:
-        """ros2, asked again (up to twice, a second apart) when it crashed on a node that left between its
-        daemon's node list and a question about that node (rclpy's "RCLError ... error not set", as after
-        a rostool run on the rclpy backend ends): the referee's own flake, not an answer to judge."""
+        """ros2, asked again (up to twice) when it crashed on a node that left between its daemon's node
+        list and a question about that node (rclpy's "RCLError ... error not set", as after a rostool run on
+        the rclpy backend ends), once its daemon no longer lists such a run: the referee's own flake, not an
+        answer to judge."""
         for _again in range(2):
             run = self.ros2(args, timeout, stdin)
             if not ("Traceback" in run.stderr and "RCLError" in run.stderr):
                 return run
-            time.sleep(1.0)
+            wait_until(lambda: not _RUN_NODE.search(self.ros2(["node", "list", "-a"]).stdout), 5, 0.2)
         return self.ros2(args, timeout, stdin)
 
     def ros2_command(self, args: list[str]) -> list[str]:
