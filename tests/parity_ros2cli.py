@@ -16,6 +16,7 @@ import contextlib
 import json
 import os
 import re
+import signal
 import subprocess
 import sys
 import threading
@@ -160,12 +161,23 @@ def require_ros2cli() -> None:
 
 
 def _run(command: list[str], env: dict[str, str], timeout: float, stdin: str | None = None) -> Run:
+    """A run to its end, or interrupted at `timeout` (SIGINT, then SIGKILL): what it printed until then is
+    kept, so that a hang says where it hung."""
+    process = subprocess.Popen(
+        command, env=env, text=True, stdin=subprocess.PIPE if stdin is not None else subprocess.DEVNULL,
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+    )  # fmt: skip
     try:
-        done = subprocess.run(command, env=env, capture_output=True, text=True, timeout=timeout, input=stdin)
-    except subprocess.TimeoutExpired as err:
-        out = err.stdout.decode() if isinstance(err.stdout, bytes) else err.stdout or ""
-        return Run(None, out, "timed out")
-    return Run(done.returncode, done.stdout, done.stderr)
+        out, err = process.communicate(stdin, timeout=timeout)
+    except subprocess.TimeoutExpired:
+        process.send_signal(signal.SIGINT)
+        try:
+            out, err = process.communicate(timeout=5)
+        except subprocess.TimeoutExpired:
+            process.kill()
+            out, err = process.communicate()
+        return Run(None, out, f"timed out after {timeout:g} s; then printed on SIGINT: {err}")
+    return Run(process.returncode, out, err)
 
 
 class ParityGraph:

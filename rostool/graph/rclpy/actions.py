@@ -59,6 +59,13 @@ def _wait(future: Any, deadline: float) -> bool:
     return True
 
 
+def _value(task: Any) -> Any:
+    """A done executor task's value, its exception raised here."""
+    if task.exception() is not None:
+        raise task.exception()
+    return task.result()
+
+
 def _server_ready(client: Any, deadline: float) -> bool:
     while not client.server_is_ready():
         if time.monotonic() >= deadline:
@@ -126,14 +133,24 @@ class GoalRun:
         result_future: Any = None
         # One try from the moment the goal may reach the server: it must not run on after a Ctrl+C
         try:
-            sent = client.send_goal_async(goal, self._on_feedback, UUID(uuid=list(goal_id)))
+            # On the executor's thread: Jazzy's ActionClient registers a request's future only after
+            # sending it, and a reply taken in between is dropped (the goal then waits forever)
+            sending = graph.context.on_executor(
+                lambda: client.send_goal_async(goal, self._on_feedback, UUID(uuid=list(goal_id)))
+            )
+            if not _wait(sending, started + limit):
+                raise GoalTimeout(f"goal {hex_id} got no result within {self.timeout:g} s; canceled it")
+            sent = _value(sending)
             if not _wait(sent, started + limit):
                 raise GoalTimeout(f"goal {hex_id} got no result within {self.timeout:g} s; canceled it")
             handle = sent.result()
             watcher.sent(hex_id, self.goal, bool(handle.accepted))
             if not handle.accepted:
                 return outcome(hex_id, None)
-            result_future = handle.get_result_async()
+            asking = graph.context.on_executor(handle.get_result_async)
+            if not _wait(asking, started + limit):
+                raise GoalTimeout(f"goal {hex_id} got no result within {self.timeout:g} s; canceled it")
+            result_future = _value(asking)
             done = threading.Event()
             result_future.add_done_callback(lambda _f: done.set())
             while not done.wait(0.02):

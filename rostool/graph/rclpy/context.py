@@ -11,6 +11,7 @@ from __future__ import annotations
 import contextlib
 import os
 import threading
+from collections.abc import Callable
 from typing import Any
 
 from rostool.errors import RostoolError
@@ -53,6 +54,12 @@ class RclpyContext:
         self._closed = threading.Event()
         self._thread = threading.Thread(target=self._spin, name="rclpy executor", daemon=True)
         self._thread.start()
+
+    def on_executor(self, function: Callable[[], Any]) -> Any:
+        """Run `function` on the executor's thread, between two of its takes; an rclpy Future of its value.
+        What sends a request and then registers its reply's future must run there when rclpy takes no lock
+        for it (Jazzy's ActionClient): taken in between, the reply is dropped as unexpected."""
+        return self.executor.create_task(function)
 
     def _spin(self) -> None:
         while not self._closed.is_set() and self.context.ok():
