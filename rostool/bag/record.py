@@ -21,10 +21,10 @@ import sqlite3
 import struct
 import threading
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
 from types import FrameType
-from typing import Any
+from typing import Any, cast
 
 from rostool.bag.formats import FORMATS
 from rostool.bag.record_options import (
@@ -39,7 +39,7 @@ from rostool.bag.record_options import (
 from rostool.bag.record_sinks import Ros1Sink, Ros2Sink, Sink
 from rostool.bag.rosbag2_dir import Rosbag2DirSink
 from rostool.errors import RostoolError
-from rostool.graph.recording import RecordSource
+from rostool.graph.recording import RecordSource, TypedRecordSource
 
 _CLOCK = struct.Struct("<iI")  # builtin_interfaces/Time after the 4-byte CDR header
 POLL_INTERVAL = 0.5  # how often the master is asked for new topics (-a, -e)
@@ -123,7 +123,8 @@ class _Ring:
 # -- the recorder --------------------------------------------------------------------------------
 class Recorder:
     def __init__(self, source: RecordSource, options: RecordOptions) -> None:
-        if not options.topics and not options.all_topics and options.node is None and options.wanted is None:
+        named = options.topics or options.static_topics
+        if not named and not options.all_topics and options.node is None and options.wanted is None:
             raise RostoolError("no topics to record: name them, or use -a (all), -e REGEX or --node NODE")
         if options.split and options.size is None and options.duration is None:
             raise RostoolError("--split needs --size MB or --duration D")
@@ -161,6 +162,7 @@ class Recorder:
         self._subscribing = threading.Lock()  # subscribing vs closing the source
         self._closing = False
         self._discover_error: RostoolError | None = None
+        self._static = _static_types(source, options.static_topics)  # checked before any file is made
 
     # -- files -----------------------------------------------------------------------------------
     def _open_next(self) -> Sink:
@@ -205,12 +207,15 @@ class Recorder:
             return True
         return any(p.fullmatch(topic) for p in self.patterns)
 
-    def _subscribe(self, topic: str) -> None:
+    def _subscribe(self, topic: str, type_name: str | None = None) -> None:
         with self._subscribing:
             if topic in self._subscribed or self._closing:
                 return
             self._subscribed.add(topic)
-            self.source.subscribe(topic, self.queue.put)
+            if type_name is None:
+                self.source.subscribe(topic, self.queue.put)
+            else:
+                cast(TypedRecordSource, self.source).subscribe(topic, self.queue.put, type_name)
 
     def _discover_loop(self, stop: threading.Event) -> None:
         """-a/-e/--node: ask the master for topics every POLL_INTERVAL, on a thread of its own, so a master
@@ -417,6 +422,8 @@ class Recorder:
         try:
             if options.use_sim_time:
                 self._follow_clock()
+            for name, type_name in self._static.items():  # first: a topic also named or found takes its type
+                self._subscribe(name, type_name)
             if not options.regex:
                 for topic in options.topics:
                     name = self.source.resolve(topic)
@@ -491,6 +498,15 @@ class Recorder:
             self.result.files.append(sink.final)
         else:
             sink.final.unlink()  # an empty last split file
+
+
+def _static_types(source: RecordSource, static: Mapping[str, str]) -> dict[str, str]:
+    """--static-topics-path: each topic's resolved name -> its type as the source's type store names it."""
+    if not static:
+        return {}
+    if not isinstance(source, TypedRecordSource):
+        raise RostoolError("static topics (a type given up front) are a ROS 2 recording mode")
+    return {source.resolve(topic): source.known_type(type_name) for topic, type_name in static.items()}
 
 
 def _compile(pattern: str) -> re.Pattern[str]:

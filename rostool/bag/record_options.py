@@ -52,6 +52,8 @@ class RecordOptions:
     snapshot: bool = False
     snapshot_seconds: float = 0.0
     storage_config: StorageConfig | None = None  # --storage-config-file, for .mcap and .db3 files
+    # --static-topics-path: topic -> type, subscribed at once with that type (no publisher waited for)
+    static_topics: Mapping[str, str] = field(default_factory=dict)
 
 
 @dataclass

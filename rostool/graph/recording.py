@@ -9,7 +9,7 @@ identifies one publisher connection cheaply: a TCPROS link in ROS 1, the topic's
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from typing import Any, Literal, Protocol
+from typing import Any, Literal, Protocol, runtime_checkable
 
 from rostool.errors import RostoolError
 
@@ -37,6 +37,18 @@ class RecordSource(Protocol):
     def describe(self, topic: str, origin: Any) -> dict[str, str]: ...
 
     def close(self) -> None: ...
+
+
+@runtime_checkable
+class TypedRecordSource(RecordSource, Protocol):
+    """A source that subscribes with a type given up front, before any publisher shows it (ROS 2:
+    `ros2 bag record --static-topics-path`); ROS 1 learns a topic's type from its publishers only."""
+
+    def known_type(self, type_name: str) -> str:
+        """The type's name as `describe` and the bag give it; RostoolError when the types cannot say."""
+        ...
+
+    def subscribe(self, topic: str, put: Put, type_name: str | None = None) -> None: ...
 
 
 class _Topic(Protocol):

@@ -12,8 +12,6 @@ from rostool.commands.bag._options import topic_list
 from rostool.errors import RostoolError
 from rostool.graph.qos import QosRequest
 
-UNSUPPORTED = ("static_topics_path",)
-
 
 @dataclass(frozen=True)
 class RecordFlags:
@@ -88,20 +86,17 @@ class RecordFlags:
 
 def check_flags(flags: RecordFlags) -> None:
     """Refuse what rostool cannot do and what ros2 bag refuses; warn where ros2 bag warns."""
-    for name in UNSUPPORTED:
-        if getattr(flags, name):
-            flag = "--" + name.replace("_", "-")
-            raise RostoolError(f"{flag} is not supported by rostool's recorder yet; leave it out")
     topics, services, topic_types = (
         flags.topic_names,
         topic_list(flags.services),
         topic_list(flags.topic_types),
     )
     all_topics, all_services, regex = flags.recording_all_topics, flags.recording_all_services, flags.regex
-    if not (all_topics or all_services or topics or services or topic_types or regex):
-        raise RostoolError(
+    static = flags.static_topics_path
+    if not (all_topics or all_services or topics or services or topic_types or regex or static):
+        raise RostoolError(  # rosbag2's own line, its missing space too
             "Need to specify at least one option out of --all, --all-topics, --all-services, --services, "
-            "--topics, --topic-types or --regex"
+            "--topics, --topic-types,--static-topics-path or --regex"
         )
     if flags.exclude_regex and not (all_topics or all_services or topic_types or regex):
         raise RostoolError(
@@ -140,6 +135,36 @@ def check_flags(flags: RecordFlags) -> None:
     for given, text in warn:
         if given:
             click.echo(f"[WARN] [ros2bag]: {text}", err=True)
+
+
+def static_topics(flags: RecordFlags) -> dict[str, str]:
+    """--static-topics-path's topics and types, but those the exclusions leave out (as rosbag2 applies them
+    above its static list): -x, --exclude-topics, --exclude-topic-types."""
+    if flags.static_topics_path is None:
+        return {}
+    from rostool.bag.static_topics import load_static_topics
+    from rostool.interfaces.names import to_store_name
+
+    def absolute(name: str) -> str:  # relative names are under the root namespace, as the recorder's own
+        return name if name.startswith(("/", "~")) else "/" + name
+
+    exclude_regex = compile_pattern(flags.exclude_regex, "-x/--exclude-regex")
+    exclude_topics = {absolute(t) for t in topic_list(flags.exclude_topics)}
+    exclude_types = {to_store_name(t) for t in topic_list(flags.exclude_topic_types)}
+    kept = {}
+    for topic, type_name in load_static_topics(flags.static_topics_path).items():
+        name = absolute(topic)
+        excluded = name in exclude_topics or to_store_name(type_name) in exclude_types
+        if not excluded and not (exclude_regex is not None and exclude_regex.search(name)):
+            kept[topic] = type_name
+    return kept
+
+
+def discovers(flags: RecordFlags) -> bool:
+    """Whether topics are looked for at all: only static topics are subscribed once and never looked for,
+    as rosbag2 turns its discovery off then."""
+    lists = (flags.topic_names, topic_list(flags.services), topic_list(flags.topic_types))
+    return flags.recording_all_topics or flags.recording_all_services or bool(flags.regex) or any(lists)
 
 
 def topic_rules(flags: RecordFlags) -> TopicRules:

@@ -13,7 +13,13 @@ from rostool.commands._common import interfaces_option
 from rostool.commands._qos import qos_options
 from rostool.commands.bag._flags import ListCommand, parsed_into
 from rostool.commands.bag._options import CONTEXT, max_rate_option, progress_option
-from rostool.commands.bag._record_ros2_flags import RecordFlags, check_flags, topic_rules
+from rostool.commands.bag._record_ros2_flags import (
+    RecordFlags,
+    check_flags,
+    discovers,
+    static_topics,
+    topic_rules,
+)
 from rostool.errors import RostoolError
 
 RECORD_LISTS = (
@@ -109,7 +115,9 @@ RECORD_LISTS = (
                    "or SIGUSR2.")  # fmt: skip
 @click.option("--ignore-leaf-topics", is_flag=True,
               help="Leave out discovered topics no one subscribes to (until someone does).")  # fmt: skip
-@click.option("--static-topics-path", metavar="FILE", help="Not supported yet (refused in one line).")
+@click.option("--static-topics-path", metavar="FILE",
+              help="YAML `static_topics_and_types_list: [[/topic, pkg/msg/Type], ...]`: subscribe to these "
+                   "at once with these types, before any publisher is seen.")  # fmt: skip
 @click.option("--storage-preset-profile", metavar="PROFILE",
               help="rosbag2's storage presets: fastwrite, zstd_fast, zstd_small (mcap); resilient "
                    "(sqlite3).")  # fmt: skip
@@ -126,7 +134,9 @@ def record(ctx: click.Context, flags: RecordFlags) -> None:
 
     Writes a rosbag2 directory (metadata.yaml and NAME_0.mcap, NAME_1.mcap, ...) that ros2 bag, rosbags
     and every rostool bag verb read. Messages are stored as received (CDR) with the publisher's QoS and
-    the receive time. With -a/--all-topics/-e/--topic-types, topics that appear later are recorded too.
+    the receive time. With -a/--all-topics/-e/--topic-types, topics that appear later are recorded too;
+    --static-topics-path's topics are subscribed at once with their given types, so a publisher that starts
+    later is recorded from its first message.
     Ctrl+C and SIGTERM leave a complete bag (exit 0). On a terminal SPACE (or SIGUSR1) pauses and resumes,
     and a dashboard shows each topic's messages, rate, bandwidth, bytes written and drops. rosbag2's
     recorder services are served: /rosbag2_recorder/pause, resume, is_paused, split_bagfile (and snapshot
@@ -144,6 +154,7 @@ def record(ctx: click.Context, flags: RecordFlags) -> None:
       rostool --ros2 bag record -a --storage-preset-profile zstd_fast
       rostool --ros2 bag record -a --storage-config-file mcap_writer_options.yaml
       rostool --ros2 bag record -a --snapshot-mode        # then: service call /rosbag2_recorder/snapshot
+      rostool --ros2 bag record --static-topics-path static.yaml  # subscribed before any publisher
     """
     from rostool.bag.qos_overrides import qos_overrides
     from rostool.bag.record_options import RecordOptions, parse_max_rates
@@ -152,6 +163,7 @@ def record(ctx: click.Context, flags: RecordFlags) -> None:
     from rostool.commands.bag._recording import RecordRequest, run_record
 
     check_flags(flags)
+    static = static_topics(flags)  # a bad file is refused before anything is made
     if flags.output and flags.output_name:
         raise RostoolError("choose one of -o/--output and -O/--output-name")
     output = (
@@ -200,13 +212,14 @@ def record(ctx: click.Context, flags: RecordFlags) -> None:
         duration=flags.duration,
         buffer_bytes=max(flags.max_cache_size, 1024 * 1024),
         rosbag2=layout,
-        wanted=selector,
+        wanted=selector if discovers(flags) else None,  # static topics only: nothing is looked for
         use_sim_time=flags.use_sim_time,
         start_paused=flags.start_paused,
         max_rates=parse_max_rates(flags.max_rate),
         snapshot=flags.snapshot_mode,
         snapshot_seconds=float(flags.max_cache_duration),
         storage_config=storage_config,
+        static_topics=static,
     )
     request = RecordRequest(
         options=options,

@@ -308,10 +308,11 @@ class RclpyGraph(Ros2Base):
     def _subscription(
         self, topic: str, on_message: OnMessage, on_error: OnError,
         request: QosRequest | None = None, warn: Callable[[str], None] | None = None,
+        type_name: str | None = None,
     ) -> Subscription:  # fmt: skip
         from rostool.graph.rclpy.subscription import RclpySubscription
 
-        return RclpySubscription(self, topic, on_message, on_error, request, warn)
+        return RclpySubscription(self, topic, on_message, on_error, request, warn, type_name)
 
     def _writer(self, topic: str, store_name: str, profile: QosProfile) -> Writer:
         from rostool.graph.rclpy.qos import to_rclpy

@@ -201,8 +201,9 @@ class Ros2Graph(Ros2Base):
     def _subscription(
         self, topic: str, on_message: OnMessage, on_error: OnError,
         request: QosRequest | None = None, warn: Callable[[str], None] | None = None,
+        type_name: str | None = None,
     ) -> Subscription:  # fmt: skip
-        return DdsSubscription(self, topic, on_message, on_error, request, warn)
+        return DdsSubscription(self, topic, on_message, on_error, request, warn, type_name)
 
     def store_name(self, type_name: str) -> str:
         return self.types.store_name(type_name)

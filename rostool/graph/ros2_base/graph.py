@@ -119,8 +119,10 @@ class Ros2Base:
     def _subscription(
         self, topic: str, on_message: OnMessage, on_error: OnError,
         request: QosRequest | None = None, warn: Callable[[str], None] | None = None,
+        type_name: str | None = None,
     ) -> Subscription:  # fmt: skip
-        """The transport's subscription; `request` and `warn` are the graph's unless given."""
+        """The transport's subscription; `request` and `warn` are the graph's unless given; `type_name` (a
+        store name) subscribes at once with that type instead of waiting for a publisher to tell it."""
         raise NotImplementedError
 
     def _service_server(self, service: str, srv_type: str, answer: Callable[[Any], Any]) -> ServedService:
@@ -246,9 +248,13 @@ class Ros2Base:
         views = self.topic_views(resolved)
         return views[0].type_name if views else None
 
-    def subscribe(self, topic: str, on_message: OnMessage, on_error: OnError | None = None) -> Subscription:
+    def subscribe(
+        self, topic: str, on_message: OnMessage, on_error: OnError | None = None, type_name: str | None = None
+    ) -> Subscription:
+        """`type_name` (known to the store: `store_name()`): subscribe at once with it (bag record's static
+        topics), not once a publisher shows the topic's type."""
         self._start()
-        sub = self._subscription(resolve(topic), on_message, on_error or self.warn)
+        sub = self._subscription(resolve(topic), on_message, on_error or self.warn, type_name=type_name)
         self._subscriptions.append(sub)
         return sub
 

@@ -15,13 +15,16 @@ from rostool.interfaces.names import hidden_name
 
 if TYPE_CHECKING:
     from rostool.graph.base import Received, Subscription
-    from rostool.graph.ros2_base.transport import Ros2Host
+    from rostool.graph.ros2_base.transport import EndpointView, Ros2Host
 
 
 # how long a recording's first subscriptions wait for their publishers to be discovered and matched: a fresh
 # participant meets Fast DDS's endpoints on its 1 s heartbeat, a Fast DDS one on the peer's 3 s announcement
 START_WAIT_SECONDS = 3.0
 READY_GRACE = 0.3  # after one subscription matched, how long one without a known publisher is waited for
+# a static topic's first message came from a publisher discovery may not have folded in yet: how long the
+# bag's description of the topic (its QoS) waits for it to show
+STATIC_DESCRIBE_WAIT = 1.0
 
 
 class Ros2Source:
@@ -36,6 +39,8 @@ class Ros2Source:
         self.resolve = graph.resolve
         graph.warn = warn  # the subscriptions' warnings (incompatible QoS) go to the same place
         self._subscriptions: list[Subscription] = []
+        self._static: dict[str, str] = {}  # topics subscribed with a type given up front: their types
+        self._offers: dict[str, list[EndpointView]] = {}  # and their publishers last seen
 
     def published_topics(self) -> list[str]:
         """Topics another node publishes now, as discovery knows them this moment: the recorder asks again
@@ -60,12 +65,40 @@ class Ros2Source:
     def subscribed_topics(self, node: str) -> list[str]:
         return subscribed_by(self.graph, node)
 
-    def subscribe(self, topic: str, put: Put) -> None:
+    def known_type(self, type_name: str) -> str:
+        """The store name of a type given up front (--static-topics-path); one line when the type store
+        cannot describe it."""
+        return self.graph.store_name(type_name)
+
+    def subscribe(self, topic: str, put: Put, type_name: str | None = None) -> None:
+        first = type_name is not None  # a static topic: note its publishers as its first message comes
+        if type_name is not None:
+            self._static[topic] = type_name
+
         def on_message(received: Received) -> None:
+            nonlocal first
+            if first:
+                first = False
+                self._note_offers(topic)
             put(topic, received.payload, received.type_name)
 
-        subscription = self.graph.subscribe(topic, on_message, lambda text: self.warn(f"{topic}: {text}"))
+        subscription = self.graph.subscribe(
+            topic, on_message, lambda text: self.warn(f"{topic}: {text}"), type_name=type_name
+        )
         self._subscriptions.append(subscription)
+
+    def _note_offers(self, topic: str, wait: float = 0.0) -> list[EndpointView]:
+        """A static topic's publishers as discovery knows them now (waiting at most `wait` s for one), else
+        the last ones seen: a publisher that came and went still describes what it sent."""
+        deadline, type_name = time.monotonic() + wait, self._static[topic]
+        while True:
+            writers = [e for e in self.graph.topic_views(topic) if e.is_writer and e.type_name == type_name]
+            if writers or time.monotonic() >= deadline:
+                break
+            time.sleep(0.01)
+        if writers:
+            self._offers[topic] = writers
+        return writers or self._offers.get(topic, [])
 
     def wait_ready(self, timeout: float = START_WAIT_SECONDS, stop: threading.Event | None = None) -> None:
         """Return once the subscriptions made so far record: each has matched the publishers discovery
@@ -90,7 +123,10 @@ class Ros2Source:
 
     def describe(self, topic: str, origin: Any) -> dict[str, str]:
         """The bag's view of the topic: its ROS 2 type and whether its publishers latch."""
-        writers = [e for e in self.graph.topic_views(topic) if e.is_writer]
+        if topic in self._static:  # subscribed before any publisher was known
+            writers = self._note_offers(topic, STATIC_DESCRIBE_WAIT)
+        else:
+            writers = [e for e in self.graph.topic_views(topic) if e.is_writer]
         latching = any(e.qos.durability == "transient_local" for e in writers)
         best_effort = bool(writers) and all(e.qos.reliability == "best_effort" for e in writers)
         return {"topic": topic, "type": str(origin), "callerid": "", "latching": "1" if latching else "0",

@@ -1,5 +1,7 @@
 """A ROS 2 subscription that drains in its own thread: it waits for the topic's publishers, subscribes with
-the QoS adapted to them (as ros2 topic echo does), and hands on CDR bytes as `Received`.
+the QoS adapted to them (as ros2 topic echo does), and hands on CDR bytes as `Received`. Given the type up
+front (`bag record --static-topics-path`), it subscribes at once with the QoS adapted to whatever publishers
+are known then (none: the request's own, reliable and volatile by default), as rosbag2 does.
 
 When a publisher appears that the reader cannot match and the QoS was left to rostool, it subscribes again
 with the QoS adapted to every publisher now known; otherwise it warns, or fails when no publisher can serve
@@ -36,8 +38,10 @@ class DrainingSubscription:
     def __init__(
         self, graph: Ros2Host, topic: str, on_message: OnMessage, on_error: OnError,
         request: QosRequest | None = None, warn: Callable[[str], None] | None = None,
+        type_name: str | None = None,
     ) -> None:  # fmt: skip
         self._graph = graph
+        self._static_type = type_name  # a store name the caller resolved: no publisher is waited for
         self._topic = topic
         self._on_message = on_message
         self._on_error = on_error
@@ -124,6 +128,8 @@ class DrainingSubscription:
         return self._graph.topic_views(self._topic)
 
     def _wait_for_type(self) -> tuple[str, QosProfile] | None:
+        if self._static_type is not None:
+            return self._static_start(self._static_type)
         while not self._closed.is_set():
             endpoints = self._endpoints()
             writers = [e for e in endpoints if e.is_writer]
@@ -137,6 +143,23 @@ class DrainingSubscription:
                 return store_name, profile
             self._closed.wait(DISCOVERY_POLL)
         return None
+
+    def _static_start(self, store_name: str) -> tuple[str, QosProfile]:
+        """The reader of a type given up front, made now: adapted to the publishers of that type known now;
+        publishers of another type never match it (said once)."""
+        writers = [e for e in self._endpoints() if e.is_writer]
+        others = sorted({w.type_name for w in writers if w.type_name != store_name})
+        if others:
+            self._warn(
+                f"{self._topic} is published as {', '.join(others)}, not {store_name}: those publishers' "
+                "messages are not recorded"
+            )
+        same = [w for w in writers if w.type_name == store_name]
+        profile, notes = adapt_to_publishers(self._request, [w.qos for w in same])
+        for note in notes:
+            self._warn(note)
+        self._expected = len(same)
+        return store_name, profile
 
     def _cache_profile(self, profile: QosProfile) -> QosProfile:
         """A reader's depth is local (it never affects matching): a deep cache lets a busy moment pass
