@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import sys
 import threading
-from collections.abc import Callable, Mapping
+from collections.abc import Callable
 from dataclasses import asdict
 from typing import TYPE_CHECKING, Any, Literal
 
@@ -21,9 +21,7 @@ from rostool.errors import RostoolError
 from rostool.graph.daemon.client import DaemonAbsent, DaemonClient, DaemonSilent, NotRelayed, OtherBuild
 from rostool.graph.daemon.place import PlaceRefused
 from rostool.graph.daemon.queries import SERVED
-from rostool.graph.daemon.relay_client import RelayedSubscription
 from rostool.graph.ros2_base.names import resolve
-from rostool.interfaces.ros2_types import Ros2Types
 
 if TYPE_CHECKING:
     from rostool.graph.base import (
@@ -38,6 +36,8 @@ if TYPE_CHECKING:
         TopicEndpoint,
         TopicInfo,
     )
+    from rostool.graph.daemon.lent_types import LentTypes
+    from rostool.graph.daemon.relay_client import RelayedSubscription
     from rostool.graph.qos import QosRequest
     from rostool.graph.recording import Encoding
 
@@ -83,6 +83,8 @@ class DaemonGraph:
         if self._direct is None and self._types is None and not self._bypass:
             distro = self._daemon_distro()
             if distro is not None:
+                from rostool.graph.daemon.lent_types import LentTypes  # the store: after discovery starts
+
                 self._types = LentTypes(distro)
         if self._direct is None and self._types is not None:
             return self._types
@@ -111,6 +113,8 @@ class DaemonGraph:
             return self.direct.subscribe(topic, on_message, report)
 
         def relayed() -> Subscription:
+            from rostool.graph.daemon.relay_client import RelayedSubscription
+
             resolved = resolve(topic)
             qos = asdict(self._qos) if self._qos is not None else {}
             try:
@@ -222,33 +226,6 @@ class DaemonGraph:
 
     def action_info(self, name: str, wait: float) -> ActionInfo:
         return self._ask("action_info", resolve(name), wait)  # type: ignore[no-any-return]
-
-
-class LentTypes(Ros2Types):
-    """Types made before the direct graph; once it is made, its types and these share one store, so what
-    either registers (a bag's types, a service's, one learned from a publisher) both know, and a renderer
-    made with these (echo's, service call's field lookup) sees it."""
-
-    _also: Ros2Types | None = None
-
-    def lend_to(self, other: Ros2Types) -> None:
-        """`other`: the direct graph's types, just made (nothing of theirs holds their store yet)."""
-        self.register(_missing(other, self))
-        if other.distro == self.distro:
-            other.store = self.store
-            return
-        # another distro than the daemon's (not one key): each keeps its store, ours passed on as we go
-        other.register(_missing(self, other))
-        self._also = other
-
-    def register(self, typs: Mapping[str, Any]) -> None:
-        super().register(typs)
-        if self._also is not None:
-            self._also.register(typs)
-
-
-def _missing(source: Ros2Types, target: Ros2Types) -> dict[str, Any]:
-    return {name: defs for name, defs in source.store.fielddefs.items() if not target.in_store(name)}
 
 
 def daemon_graph(requested_backend: str | None, direct: Callable[[], Graph]) -> Graph:
