@@ -57,6 +57,20 @@ def topic_metadata(bag: Path) -> dict[str, dict[str, Any]]:
     return {t["topic_metadata"]["name"]: t["topic_metadata"] for t in info["topics_with_message_count"]}
 
 
+def mcap_schemas(path: Path) -> dict[str, tuple[str, str, bytes]]:
+    """topic -> its channel's schema (name, encoding, data), read with the mcap library."""
+    from mcap.reader import make_reader
+
+    with path.open("rb") as stream:
+        summary = make_reader(stream).get_summary()
+    assert summary is not None
+    return {
+        channel.topic: (schema.name, schema.encoding, schema.data)
+        for channel in summary.channels.values()
+        for schema in [summary.schemas[channel.schema_id]]
+    }
+
+
 def subscribed_before_published(event: dict[str, Any]) -> bool:
     return bool(event["subscribers"].get("/late")) and not event["publishers"].get("/late")
 
@@ -95,6 +109,8 @@ def test_talker_started_later_is_recorded_from_its_first_message(
     rows = topic_metadata(bag)
     late_row, found_row = ({k: v for k, v in rows[t].items() if k != "name"} for t in ("/late", "/found"))
     assert late_row == found_row, rows
+    schemas = mcap_schemas(next(bag.glob("*.mcap")))  # and the message definition the .mcap holds for it
+    assert schemas["/late"] == schemas["/found"] and schemas["/late"][0] == "std_msgs/msg/String", schemas
 
 
 @pytest.mark.parametrize("distro", ["jazzy"], indirect=True)

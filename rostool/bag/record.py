@@ -233,7 +233,7 @@ class Recorder:
         """--use-sim-time: stamp messages with the latest /clock (rosgraph_msgs/msg/Clock, CDR)."""
         latest: list[int] = []
         self.queue.clock = lambda: latest[0] if latest else None
-        record_clock = "/clock" in self.options.topics or self._wanted("/clock")
+        record_clock = "/clock" in self.options.topics or "/clock" in self._static or self._wanted("/clock")
         put = self.queue.put
 
         def on_clock(topic: str, payload: bytes, origin: Any) -> None:
