@@ -226,8 +226,9 @@ class Peer(Node):
     def burst(self, args: argparse.Namespace) -> None:
         """--count N: once --subs subscribers matched, N messages at --rate (0: as fast as possible)."""
         while self.publisher.get_subscription_count() < args.subs:
-            time.sleep(0.05)
-        time.sleep(1.0)
+            time.sleep(0.005 if args.at_once else 0.05)
+        if not args.at_once:
+            time.sleep(1.0)
         period = 1.0 / args.rate if args.rate else 0.0
         start = time.perf_counter()
         for i in range(args.count):
@@ -341,6 +342,9 @@ def main() -> None:
     parser.add_argument("--latched", action="store_true")
     parser.add_argument("--count", type=int, help="with --talk: publish N messages, then idle")
     parser.add_argument("--subs", type=int, default=1, help="with --count: subscribers to wait for")
+    parser.add_argument(
+        "--at-once", action="store_true", help="with --count: publish the moment they matched (no 1 s pause)"
+    )
     parser.add_argument("--raw-count", help="count std_msgs/String here (raw=True, as ros2 topic hz)")
     parser.add_argument("--listen", action="append", default=[])
     parser.add_argument("--params", action="store_true", help="declare a parameter of every type")

@@ -140,6 +140,31 @@ def test_best_effort_talker_started_later_is_recorded_with_its_qos(
     assert [p.reliability for p in qos["/late"]] == [QosReliability.BEST_EFFORT], qos
 
 
+@pytest.mark.parametrize("distro", ["jazzy"], indirect=True)
+def test_talker_publishing_the_moment_it_matched_is_recorded_whole_on_rclpy(
+    distro: str, graph_env: dict[str, str], start_peer: Start, tmp_path: Path
+) -> None:
+    """rosbag2's case for static topics: a node waits for the recorder's subscription (wait_for_matched)
+    and publishes at once. On the rclpy backend (the node's own RMW) every message is in the bag. (On the DDS
+    backend a Fast DDS writer matches rostool's waiting reader before Cyclone knows the writer: what it
+    sends in that moment is lost; CONTRIBUTING.)"""
+    static = tmp_path / "static.yaml"
+    static.write_text("static_topics_and_types_list:\n  - [/late, std_msgs/msg/String]\n")
+    bag = tmp_path / "at_once.mcap"
+    args = ["bag", "record", "--static-topics-path", str(static), "-o", str(bag), "--progress", "0.2"]
+    run = recorder("rclpy", args, graph_env, tmp_path, distro)
+    try:
+        assert run.wait_for(lambda out: "rostool: recording " in out, 30), run.stdout
+        talker = ["--talk", "/late", "--count", "20", "--rate", "50", "--depth", "100", "--at-once"]
+        start_peer("--name", "late", *talker).wait_for("sent", timeout=30)
+        assert run.wait_for(lambda out: ": 20 msgs on 1 topic" in out, 30), run.stdout
+    finally:
+        out, _err = run.stop()
+    assert run.proc.returncode == 0, out
+    _types, found, _qos = bag_strings(bag)
+    assert found["/late"] == [f"hello {i}" for i in range(20)]
+
+
 BAD_FILES = [  # the file's text (None: no file) and how the line goes on after `--static-topics-path FILE: `
     (None, "no such file"),
     ("static_topics_and_types_list: [\n", "not YAML: line 2, column 1: "),

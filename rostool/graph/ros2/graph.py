@@ -398,7 +398,7 @@ class DdsSubscription(DrainingSubscription):
 
     def _read_with(self, store_name: str, profile: QosProfile) -> QosProfile | None:
         from cyclonedds._clayer import ddspy_take  # type: ignore[import-not-found]
-        from cyclonedds.core import ReadCondition
+        from cyclonedds.core import DDSStatus, ReadCondition
         from cyclonedds.util import duration
 
         from rostool.graph.ros2.dds import wakeable_waitset
@@ -413,15 +413,29 @@ class DdsSubscription(DrainingSubscription):
         ref = reader._ref
         reported = 0
         next_check = 0.0
+        rejoin = self._rejoins()
+        if rejoin:  # the first match wakes the wait (see DrainingSubscription._rejoins)
+            reader.set_status_mask(DDSStatus.SubscriptionMatched)
+            waitset.attach(reader)
         while not self._closed.is_set():
             waitset.wait(duration(milliseconds=250))
+            took = False
             while True:
                 samples = ddspy_take(ref, _ANY_SAMPLE, 512)
                 if isinstance(samples, int) or not samples:
                     break
+                took = True
                 for data, info in samples:
                     if info.valid_data:
                         receive(data)
+            if rejoin and took:  # it takes messages: it stays, and its status no longer wakes the wait
+                rejoin = False
+                waitset.detach(reader)
+            elif rejoin and reader.get_subscription_matched_status().current_count > 0:
+                self._rejoined = True
+                self._reader = None
+                session.drop(reader)
+                return profile
             now = time.monotonic()
             if now >= next_check:
                 next_check = now + 0.5

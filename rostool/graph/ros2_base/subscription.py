@@ -42,6 +42,7 @@ class DrainingSubscription:
     ) -> None:  # fmt: skip
         self._graph = graph
         self._static_type = type_name  # a store name the caller resolved: no publisher is waited for
+        self._rejoined = False
         self._topic = topic
         self._on_message = on_message
         self._on_error = on_error
@@ -160,6 +161,14 @@ class DrainingSubscription:
             self._warn(note)
         self._expected = len(same)
         return store_name, profile
+
+    def _rejoins(self) -> bool:
+        """Whether to make the reader again once its first publisher matched, before any message came: a
+        reader made before any publisher was known (a static topic's). A Fast DDS writer matches such a
+        reader at once and sends to it before the reader's side knows the writer, and Cyclone's reader
+        then takes nothing until the writer's next periodic heartbeat (a second of messages lost); a
+        reader made once the writer is known gets its initial heartbeat and its history at once. Once."""
+        return self._static_type is not None and self._expected == 0 and not self._rejoined
 
     def _cache_profile(self, profile: QosProfile) -> QosProfile:
         """A reader's depth is local (it never affects matching): a deep cache lets a busy moment pass
