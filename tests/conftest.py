@@ -53,6 +53,9 @@ def pytest_configure(config: pytest.Config) -> None:
     config.addinivalue_line(
         "markers", "alone: measures a rate or a time window: runs while no other test of the session runs"
     )
+    from tests.cpu_profile import register
+
+    register(config)  # ROSTOOL_TEST_CPU=DIR: CPU seconds per test (tests/cpu_profile.py)
 
 
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
