@@ -27,7 +27,7 @@ from rostool.graph.ros2.types import TypeSupport
 from rostool.graph.ros2_base.env import discovery_range
 from rostool.graph.ros2_base.graph import NodeEndpoints, Ros2Base
 from rostool.graph.ros2_base.names import UNKNOWN_NODE, request_topic, resolve, service_type, topic_to_dds
-from rostool.graph.ros2_base.subscription import DrainingSubscription
+from rostool.graph.ros2_base.subscription import REJOIN_POLL, DrainingSubscription
 from rostool.graph.ros2_base.transport import EndpointView, ServiceEndpoint
 from rostool.interfaces.ros2_types import distro_from_env
 
@@ -418,7 +418,7 @@ class DdsSubscription(DrainingSubscription):
             reader.set_status_mask(DDSStatus.SubscriptionMatched)
             waitset.attach(reader)
         while not self._closed.is_set():
-            waitset.wait(duration(milliseconds=250))
+            waitset.wait(duration(milliseconds=round(REJOIN_POLL * 1000) if rejoin else 250))
             took = False
             while True:
                 samples = ddspy_take(ref, _ANY_SAMPLE, 512)
@@ -431,7 +431,9 @@ class DdsSubscription(DrainingSubscription):
             if rejoin and took:  # it takes messages: it stays, and its status no longer wakes the wait
                 rejoin = False
                 waitset.detach(reader)
-            elif rejoin and reader.get_subscription_matched_status().current_count > 0:
+            elif rejoin and (
+                reader.get_subscription_matched_status().current_count > 0 or self._static_writer_known()
+            ):
                 self._rejoined = True
                 self._reader = None
                 session.drop(reader)

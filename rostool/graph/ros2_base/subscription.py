@@ -30,6 +30,7 @@ SUBSCRIBERS_ONLY_WAIT = 0.5  # a topic with subscribers only: how long publisher
 # after discovery knew one (a look at what discovery already holds costs microseconds)
 DISCOVERY_POLL = 0.01
 MATCH_POLL = 0.005  # how often wait_matched looks at the reader's matched count (a status read)
+REJOIN_POLL = 0.02  # how often a reader that may be made again (`_rejoins`) looks for its first publisher
 
 
 class DrainingSubscription:
@@ -163,12 +164,18 @@ class DrainingSubscription:
         return store_name, profile
 
     def _rejoins(self) -> bool:
-        """Whether to make the reader again once its first publisher matched, before any message came: a
-        reader made before any publisher was known (a static topic's). A Fast DDS writer matches such a
-        reader at once and sends to it before the reader's side knows the writer, and Cyclone's reader
-        then takes nothing until the writer's next periodic heartbeat (a second of messages lost); a
-        reader made once the writer is known gets its initial heartbeat and its history at once. Once."""
+        """Whether to make the reader again once its first publisher is known (discovery shows it, or the
+        reader matched it), before any message came: a reader made before any publisher was known (a
+        static topic's). Measured with Fast DDS publishers and rostool's Cyclone reader: a new Fast DDS
+        participant learns of a reader that was there before it only about a second later (a reader made
+        after it is announced to it at once), and a writer that did match it first sends before Cyclone
+        knows the writer, whose reader then takes nothing until the writer's next heartbeat. A reader made
+        once the writer is known is matched and in step at once, as any other subscription. Once."""
         return self._static_type is not None and self._expected == 0 and not self._rejoined
+
+    def _static_writer_known(self) -> bool:
+        """A publisher of the static type is known to discovery now."""
+        return any(e.is_writer and e.type_name == self._static_type for e in self._endpoints())
 
     def _cache_profile(self, profile: QosProfile) -> QosProfile:
         """A reader's depth is local (it never affects matching): a deep cache lets a busy moment pass
