@@ -44,12 +44,13 @@ class Session:
         writer_qos = dds.to_dds_qos(graph_qos, user_data)
         reader_qos = dds.to_dds_qos(QosProfile("reliable", "transient_local", 0), user_data)
         self._info_writer = DataWriter(self.participant.dp, info_topic, qos=writer_qos)
-        self._info_reader = DataReader(
-            self.participant.dp, info_topic, qos=Qos(*reader_qos.policies, Policy.IgnoreLocal.Participant)
-        )
         self.cache = cache if cache is not None else GraphCache(self.participant)
-        self.cache.info_reader = self._info_reader
         self.announce()
+        self.cache.defer_info_reader(
+            lambda: DataReader(
+                self.participant.dp, info_topic, qos=Qos(*reader_qos.policies, Policy.IgnoreLocal.Participant)
+            )
+        )
 
     def announce(self) -> None:
         from cyclonedds._clayer import ddspy_write  # type: ignore[import-not-found]
