@@ -19,8 +19,8 @@ import pytest
 
 from tests.support import IN_CI, free_port, rostool, wait_until
 
-# `ray stop --force` ends every Ray on the machine: the Ray tests (here and in test_bag_s3.py) run one
-# after another, in one worker
+# the Ray tests (here and in test_bag_s3.py) run one after another, in one worker: each checks that every
+# Ray listener on the machine is on loopback, and several Rays at once on 2 cores only slow each other
 pytestmark = pytest.mark.xdist_group("ray")
 
 TESTDATA = Path(__file__).resolve().parents[2] / "shared" / "testdata"
@@ -102,17 +102,30 @@ def ray_head(env: dict[str, str]) -> Iterator[dict[str, str]]:
     head_env = {**env, "RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER": "0", "RAY_AUTH_MODE": "token"}
     head_env["RAY_AUTH_TOKEN"] = "a" * 64
     assert RAY is not None
-    start = [RAY, "start", "--head", "--node-ip-address", "127.0.0.1", "--port", str(port), "--num-cpus", "2"]
-    start += ["--include-dashboard", "false", "--disable-usage-stats"]
-    started = subprocess.run(start, env=head_env, capture_output=True, text=True, timeout=120, check=False)
+    start = [RAY, "start", "--head", "--block", "--node-ip-address", "127.0.0.1", "--port", str(port)]
+    start += ["--num-cpus", "2", "--include-dashboard", "false", "--disable-usage-stats"]
+    # stopped by its own pid (`--block`: its daemons go with it), not by `ray stop`, which ends every Ray
+    # on the machine (another session's included)
+    head = subprocess.Popen(start, env=head_env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
     try:
-        assert started.returncode == 0, started.stderr
-        assert wait_until(lambda: bool(_ray_listeners()), 20)
+        assert wait_until(lambda: head.poll() is not None or _listening(port), 120)
+        assert head.poll() is None, head.stderr.read().decode() if head.stderr else ""
         loopback = ("127.0.0.1:", "[::ffff:127.0.0.1]:")
         assert all(a.startswith(loopback) for a in _ray_listeners()), _ray_listeners()
-        yield {**head_env, "RAY_ADDRESS": f"127.0.0.1:{port}"}
+        # the client without RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER: rostool keeps a loopback address on loopback
+        client = {k: v for k, v in head_env.items() if k != "RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER"}
+        yield {**client, "RAY_ADDRESS": f"127.0.0.1:{port}"}
     finally:
-        subprocess.run([RAY, "stop", "--force"], env=head_env, capture_output=True, timeout=60, check=False)
+        head.terminate()
+        try:
+            head.wait(60)
+        except subprocess.TimeoutExpired:
+            head.kill()
+            head.wait()
+
+
+def _listening(port: int) -> bool:
+    return any(address.endswith(f":{port}") for address in _ray_listeners())
 
 
 def test_a_ray_cluster_by_address_and_a_bad_bag(tmp_path: Path, ray_env: dict[str, str]) -> None:

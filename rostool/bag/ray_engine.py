@@ -2,9 +2,10 @@
 
 Without an address (`--ray-address`, else RAY_ADDRESS) a local Ray is started for the run and stopped after
 it: loopback only (Ray 2.60 binds its daemons to every interface unless RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER=0),
-no dashboard, no usage statistics, and token authentication with a token of this run's own, kept in the
-environment (a plain `ray.init()` would write ~/.ray/auth_token, which later clients then trip over). With an
-address, the cluster's own settings hold; rostool must be installed on its nodes. Ray's log lines stay out
+no dashboard, no usage statistics, workers at the user's priority (Ray's default is nice 15), and token
+authentication with a token of this run's own, kept in the environment (a plain `ray.init()` would write
+~/.ray/auth_token, which later clients then trip over). With an address, the cluster's own settings hold
+(its workers' niceness too); rostool must be installed on its nodes. Ray's log lines stay out
 of the user's terminal: failures come back as rostool's one-line errors.
 """
 
@@ -30,11 +31,11 @@ def connect(address: str | None) -> Any:
     address = address or os.environ.get("RAY_ADDRESS") or None
     # before Ray is imported: it reads its settings once
     os.environ.setdefault("RAY_USAGE_STATS_ENABLED", "0")
-    if not address:
+    if not address or _is_loopback(address):  # else Ray swaps 127.0.0.1 for this machine's public address
         os.environ["RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER"] = "0"
-        if "RAY_AUTH_MODE" not in os.environ:
-            os.environ["RAY_AUTH_MODE"] = "token"
-            os.environ["RAY_AUTH_TOKEN"] = secrets.token_hex(32)
+    if not address and "RAY_AUTH_MODE" not in os.environ:
+        os.environ["RAY_AUTH_MODE"] = "token"
+        os.environ["RAY_AUTH_TOKEN"] = secrets.token_hex(32)
     try:
         import ray
     except ImportError as err:
@@ -46,7 +47,14 @@ def connect(address: str | None) -> Any:
         if address:
             ray.init(address=address, **quiet)
         else:
-            ray.init(include_dashboard=False, _node_ip_address="127.0.0.1", **quiet)
+            # Ray runs its workers at nice 15: on a machine doing other work, a private Ray's export would
+            # yield to everything else, where the local engine's processes do not
+            ray.init(
+                include_dashboard=False,
+                _node_ip_address="127.0.0.1",
+                _system_config={"worker_niceness": 0},
+                **quiet,
+            )
     except Exception as err:  # Ray's own errors: a wrong address, a cluster that does not answer
         where = f"the Ray cluster at {address}" if address else "a local Ray"
         raise RostoolError(f"cannot start {where}: {_first_line(err)}") from err
@@ -86,6 +94,11 @@ def runner(address: str | None) -> Callable[..., Results[Any]]:
                 raise
 
     return run
+
+
+def _is_loopback(address: str) -> bool:
+    host = address.rpartition(":")[0].strip("[]") if ":" in address else address
+    return host in ("localhost", "::1") or host.startswith("127.")
 
 
 def _first_line(err: BaseException) -> str:
