@@ -14,6 +14,7 @@ import contextlib
 import json
 import os
 import sys
+import threading
 import time
 from collections import defaultdict
 from collections.abc import Iterator
@@ -45,29 +46,103 @@ class CpuProfile:
     @pytest.hookimpl(hookwrapper=True)
     def pytest_runtest_protocol(self, item: pytest.Item) -> Iterator[None]:
         group = self.root / str(len(self.tests))
-        group.mkdir()
-        (group / "cgroup.procs").write_text(str(os.getpid()))
+        (group / "pytest").mkdir(parents=True)
+        (group / "pytest" / "cgroup.procs").write_text(str(os.getpid()))
+        sorter = KindSorter(group)
         start = time.monotonic()
         try:
             yield
         finally:
             (self.home / "cgroup.procs").write_text(str(os.getpid()))
+            sorter.stop()
             wall = time.monotonic() - start
-            cpu = int((group / "cpuacct.usage").read_text()) / 1e9
-            self.tests.append({"test": item.nodeid, "wall": wall, "cpu": cpu, "group": str(group)})
+            self.tests.append({"test": item.nodeid, "wall": wall, "cpu": _usage(group), "group": str(group),
+                               "started": dict(sorter.started)})  # fmt: skip
 
     def pytest_sessionfinish(self) -> None:
-        """Writes each test's CPU at its end and now (`cpu_after`: with what its processes did since)."""
+        """Writes each test's CPU at its end and now (`cpu_after`: with what its processes did since, and
+        `kinds`: that split by the kind of process)."""
         self.out_dir.mkdir(parents=True, exist_ok=True)
         with open(self.out_dir / f"{self.worker}.jsonl", "a", encoding="utf-8") as out:
             for test in self.tests:
                 group = Path(str(test.pop("group")))
-                test["cpu_after"] = int((group / "cpuacct.usage").read_text()) / 1e9
+                test["cpu_after"] = _usage(group)
+                test["kinds"] = {kind.name: _usage(kind) for kind in group.iterdir() if kind.is_dir()}
                 out.write(json.dumps(test) + "\n")
-                with contextlib.suppress(OSError):  # only when no process of the test is left
-                    group.rmdir()
+                for folder in [*group.iterdir(), group]:
+                    with contextlib.suppress(OSError):  # only when no process of the test is left
+                        folder.rmdir()
         with contextlib.suppress(OSError):
             self.root.rmdir()
+
+
+def _usage(group: Path) -> float:
+    return int((group / "cpuacct.usage").read_text()) / 1e9
+
+
+def kind_of(cmdline: list[str]) -> str:
+    """What a process the test started is, from its command line."""
+    text = " ".join(cmdline)
+    if "rostool.graph.daemon" in text:
+        return "rostool daemon"
+    if "-m rostool" in text or Path(cmdline[1:2][0] if cmdline[1:] else "").name == "rostool":
+        return "rostool rclpy" if "--ros2-backend rclpy" in text else "rostool"
+    if "ros2cli.daemon" in text:
+        return "ros2 daemon"
+    if cmdline[1:2] and cmdline[1].endswith("/ros2"):
+        return "ros2"
+    if "rclpy_peer.py" in text:
+        return "rclpy peer"
+    if text.startswith("/usr/bin/python3") or "rosmaster" in text or "roscore" in text:
+        return "ROS 1 (Debian)"
+    if "ray" in text:
+        return "ray"
+    script = " -c" if cmdline[1:2] == ["-c"] else ""
+    return f"other {Path(cmdline[0]).name}{script}" if cmdline else "other"
+
+
+class KindSorter:
+    """Moves each process of the test, once it has exec'd, into a cgroup named by its kind (its children
+    inherit that one, and are moved again when they exec something else, as a daemon a verb starts). What
+    runs before a process is sorted (at most one poll, 50 ms) stays with its parent's kind."""
+
+    def __init__(self, group: Path) -> None:
+        self.group = group
+        self.cmdlines: dict[str, bytes] = {}
+        self.started: dict[str, int] = defaultdict(int)  # processes sorted per kind
+        self.me = str(os.getpid())  # the worker stays in `pytest`
+        self.done = threading.Event()
+        self.thread = threading.Thread(target=self._run, daemon=True)
+        self.thread.start()
+
+    def _run(self) -> None:
+        while not self.done.wait(0.05):
+            for kind in [d for d in self.group.iterdir() if d.is_dir()]:
+                for pid in (kind / "cgroup.procs").read_text().split():
+                    if pid != self.me:
+                        self._sort(pid, kind.name)
+
+    def _sort(self, pid: str, now: str) -> None:
+        try:
+            raw = Path(f"/proc/{pid}/cmdline").read_bytes()
+            ppid = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[1]
+            if raw == Path(f"/proc/{ppid}/cmdline").read_bytes():
+                return  # forked, not exec'd (yet)
+        except OSError:
+            return  # gone already
+        if not raw or self.cmdlines.get(pid) == raw:
+            return  # a zombie, or sorted already
+        self.cmdlines[pid] = raw
+        kind = kind_of(raw.decode(errors="replace").rstrip("\0").split("\0"))
+        self.started[kind] += 1
+        if kind != now:
+            with contextlib.suppress(OSError):
+                (self.group / kind).mkdir(exist_ok=True)
+                (self.group / kind / "cgroup.procs").write_text(pid)
+
+    def stop(self) -> None:
+        self.done.set()
+        self.thread.join()
 
 
 def register(config: pytest.Config) -> None:
@@ -101,6 +176,16 @@ def summary(out_dir: Path, top: int = 0) -> str:
         ratio = cpu_after / wall if wall else 0.0
         lines.append(f"{module:55} {count:5d} {cpu_after:8.1f} {cpu:8.1f} {wall:8.1f} {ratio:8.2f}")
     lines.append(f"{'total':55} {int(total[3]):5d} {total[0]:8.1f} {total[1]:8.1f} {total[2]:8.1f}")
+    kinds: dict[str, float] = defaultdict(float)
+    started: dict[str, int] = defaultdict(int)
+    for test in records:
+        for kind, cpu in test.get("kinds", {}).items():
+            kinds[kind] += cpu
+        for kind, count in test.get("started", {}).items():
+            started[kind] += count
+    for kind, cpu in sorted(kinds.items(), key=lambda kv: -kv[1]):
+        each = f"{started[kind]:6d} processes, {cpu / started[kind]:.3f} s each" if started[kind] else ""
+        lines.append(f"  {kind:30} {cpu:8.1f} CPU s {each}")
     for test in sorted(records, key=lambda t: -t["cpu_after"])[:top]:
         lines.append(f"{test['cpu_after']:7.1f} CPU s {test['wall']:7.1f} wall s  {test['test']}")
     return "\n".join(lines)
