@@ -165,6 +165,32 @@ def test_talker_publishing_the_moment_it_matched_is_recorded_whole_on_rclpy(
     assert found["/late"] == [f"hello {i}" for i in range(20)]
 
 
+@pytest.mark.parametrize("distro", ["jazzy"], indirect=True)
+@pytest.mark.parametrize("backend", ["dds", "rclpy"])
+def test_publisher_of_another_type_is_warned_about(
+    backend: str, distro: str, graph_env: dict[str, str], start_peer: Start, tmp_path: Path
+) -> None:
+    """A static type that is not the publisher's (a typo in the file): its reader never matches, and the
+    user is told once, when that publisher shows up."""
+    static = tmp_path / "static.yaml"
+    static.write_text("static_topics_and_types_list:\n  - [/late, std_msgs/msg/Int32]\n")
+    bag = tmp_path / "typo.mcap"
+    args = ["bag", "record", "--static-topics-path", str(static), "-o", str(bag), "--progress", "0.2"]
+    run = recorder(backend, args, graph_env, tmp_path, distro)
+    warning = "/late is published as std_msgs/msg/String, not std_msgs/msg/Int32"
+    try:
+        assert run.wait_for(lambda out: "rostool: recording " in out, 30), run.stdout
+        talker = start_peer("--name", "late", "--talk", "/late", "--rate", "20")
+        talker.wait_for("published", lambda e: e["count"] >= 20, timeout=30)
+        assert run.wait_for(lambda out: warning in out, 30), run.stdout
+    finally:
+        out, _err = run.stop()
+    assert run.proc.returncode == 0, out
+    assert out.count(warning) == 1, out
+    types, found, _qos = bag_strings(bag)
+    assert types == {} and found == {}
+
+
 BAD_FILES = [  # the file's text (None: no file) and how the line goes on after `--static-topics-path FILE: `
     (None, "no such file"),
     ("static_topics_and_types_list: [\n", "not YAML: line 2, column 1: "),

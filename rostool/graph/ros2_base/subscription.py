@@ -44,6 +44,7 @@ class DrainingSubscription:
         self._graph = graph
         self._static_type = type_name  # a store name the caller resolved: no publisher is waited for
         self._rejoined = False
+        self._other_types: set[str] = set()  # a static topic's publishers of another type, warned about
         self._topic = topic
         self._on_message = on_message
         self._on_error = on_error
@@ -150,12 +151,7 @@ class DrainingSubscription:
         """The reader of a type given up front, made now: adapted to the publishers of that type known now;
         publishers of another type never match it (said once)."""
         writers = [e for e in self._endpoints() if e.is_writer]
-        others = sorted({w.type_name for w in writers if w.type_name != store_name})
-        if others:
-            self._warn(
-                f"{self._topic} is published as {', '.join(others)}, not {store_name}: those publishers' "
-                "messages are not recorded"
-            )
+        self._warn_other_types(writers)
         same = [w for w in writers if w.type_name == store_name]
         profile, notes = adapt_to_publishers(self._request, [w.qos for w in same])
         for note in notes:
@@ -175,8 +171,20 @@ class DrainingSubscription:
         return self._static_type is not None and self._expected == 0 and not self._rejoined
 
     def _static_writer_known(self) -> bool:
-        """A publisher of the static type is known to discovery now."""
-        return any(e.is_writer and e.type_name == self._static_type for e in self._endpoints())
+        """A publisher of the static type is known to discovery now (one of another type is warned about)."""
+        writers = [e for e in self._endpoints() if e.is_writer]
+        self._warn_other_types(writers)
+        return any(w.type_name == self._static_type for w in writers)
+
+    def _warn_other_types(self, writers: list[EndpointView]) -> None:
+        """Publishers of another type than the static one never match its reader: said once per type."""
+        others = sorted({w.type_name for w in writers} - {self._static_type, *self._other_types})
+        if others:
+            self._other_types.update(others)
+            self._warn(
+                f"{self._topic} is published as {', '.join(others)}, not {self._static_type}: those "
+                "publishers' messages are not recorded"
+            )
 
     def _cache_profile(self, profile: QosProfile) -> QosProfile:
         """A reader's depth is local (it never affects matching): a deep cache lets a busy moment pass
