@@ -211,7 +211,8 @@ class GraphCache:
         self.endpoints: dict[bytes, Endpoint] = {}
         self.nodes: dict[bytes, list[NodeEntry]] = {}  # participant GUID -> its nodes
         self.started = time.monotonic()
-        self.changed = self.started
+        self.changed = self.started  # participants or endpoints last changed
+        self.nodes_changed = self.started  # ros_discovery_info last changed
         self.long_lived = False  # settled once (the daemon's cache): later settles only poll
 
     def poll(self) -> bool:
@@ -249,11 +250,13 @@ class GraphCache:
                     changed = True
             if self._make_info_reader is not None and self._info_reader_due():
                 self.info_reader, self._make_info_reader = self._make_info_reader(), None
-            changed |= self._poll_info()
-            for gone in [key for key in self.nodes if key not in self.participants]:
-                del self.nodes[gone]  # a leaver's last ros_discovery_info may come after it is gone
             if changed:
                 self.changed = time.monotonic()
+            if self._poll_info():
+                self.nodes_changed = time.monotonic()
+                changed = True
+            for gone in [key for key in self.nodes if key not in self.participants]:
+                del self.nodes[gone]  # a leaver's last ros_discovery_info may come after it is gone
         return changed
 
     def defer_info_reader(self, make: Callable[[], Any]) -> None:
@@ -325,7 +328,8 @@ class GraphCache:
                 return remote
             # each participant's endpoints come in one burst per SEDP writer, so once every participant
             # has shown both kinds a short quiet spell is enough
-            if remote and elapsed >= minimum and now - self.changed >= quiet and self._described(nodes):
+            last = max(self.changed, self.nodes_changed) if nodes else self.changed
+            if remote and elapsed >= minimum and now - last >= quiet and self._described(nodes):
                 return remote
             time.sleep(POLL_SECONDS)
 
