@@ -227,6 +227,10 @@ def test_a_bag_is_cut_where_its_decoding_costs_enough(tmp_path: Path) -> None:
     assert pieces([tf], jobs=3) == [2, 2]  # three workers, but not 3 x PIECE_SECONDS of work
     assert pieces([imu]) == [1]
     assert pieces([tf, imu]) == [2, 2, 1]
+    options = ExportOptions(fmt="parquet", out=tmp_path / "out")
+    order = plan(expand([imu, tf]), options, None, 2, False)[1]  # the costliest first, pieces in order
+    assert [(item.name, item.piece) for item in order] == [("tf", 0), ("tf", 1), ("imu", 0)]
+    assert [item.name for item in plan(expand([imu, tf]), options, None, 1, False)[1]] == ["imu", "tf"]
     copies = []
     for name in "abcd":
         copies.append(tmp_path / f"{name}.mcap")

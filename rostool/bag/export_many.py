@@ -38,15 +38,15 @@ def export_bags(
     exported = 0
     work = partial(_export_one, options, several, remote_out)
     jobs, cut = plan(items, options, remote_out, jobs, runner is not None, piece_bytes)
-    done: dict[str, list[ExportResult]] = {}  # a cut bag's pieces exported so far
+    done: dict[str, list[tuple[int, ExportResult]]] = {}  # a cut bag's pieces exported so far
     unfinished = {item.name for item in cut if item.pieces > 1}
     try:
         for item, result in successes(work, cut, jobs, "exporting", keep_going, runner=runner):
             if item.pieces > 1:
-                done.setdefault(item.name, []).append(result)
+                done.setdefault(item.name, []).append((item.piece, result))
                 if len(done[item.name]) < item.pieces:
                     continue
-                pieces = done.pop(item.name)
+                pieces = [piece for _k, piece in sorted(done.pop(item.name), key=lambda pair: pair[0])]
                 joined = join_pieces([name for piece in pieces for name in piece.pieces])
                 unfinished.discard(item.name)
                 result = ExportResult(
@@ -77,7 +77,8 @@ def plan(
     one core): without -j, worker processes when the whole costs at least PARALLEL_FROM (or weighs
     many.PARALLEL_FROM_BYTES); a bag is cut (an indexed local .mcap, Parquet tables, no images) into as
     many pieces as its share of the work holds PIECE_SECONDS, at most one per worker: with as many bags as
-    workers or more, none is cut unless it outweighs the others."""
+    workers or more, none is cut unless it outweighs the others. With several workers the work comes the
+    costliest first: the last to start are the shortest, so every worker stays busy to the end."""
     from rostool.bag import export_cost
     from rostool.bag.many import default_jobs
 
@@ -86,9 +87,11 @@ def plan(
     if jobs is None and not ray and sum(costs) >= export_cost.PARALLEL_FROM:
         jobs = default_jobs()  # else many.run's rule by bytes (images cost more than their estimate)
     workers = jobs or default_jobs()
-    if workers < 2 or options.fmt != "parquet" or options.images is not None or remote_out is not None:
+    if workers < 2:
         return jobs, list(items)
-    work = []
+    if options.fmt != "parquet" or options.images is not None or remote_out is not None:
+        return jobs, _largest_first(list(zip(items, costs, strict=True)))
+    work: list[tuple[BagItem, float]] = []
     share = max(export_cost.PIECE_SECONDS, sum(costs) / (2 * workers))
     for item, size, cost in zip(items, sizes, costs, strict=True):
         if piece_bytes is not None:
@@ -96,8 +99,13 @@ def plan(
         else:
             pieces = min(workers, int(cost // share)) if size else 1
         pieces = max(1, pieces)
-        work.extend(replace(item, piece=k, pieces=pieces) for k in range(pieces))
-    return jobs, work
+        work.extend((replace(item, piece=k, pieces=pieces), cost / pieces) for k in range(pieces))
+    return jobs, _largest_first(work)
+
+
+def _largest_first(work: list[tuple[BagItem, float]]) -> list[BagItem]:
+    """The items by estimated cost, the largest first (a stable sort: a cut bag's pieces stay in order)."""
+    return [item for item, _cost in sorted(work, key=lambda pair: -pair[1])]
 
 
 def _remove_pieces(out: Path, partition: str | None) -> None:
@@ -131,14 +139,14 @@ def _export_one(options: ExportOptions, several: bool, remote_out: Any, item: Ba
     partition = item.name if several else None
     piece = (item.piece, item.pieces) if item.pieces > 1 else None
     if remote_out is None:
-        with _fewer_collections():
+        with fewer_collections():
             return export_bag(item.path, options, partition=partition, progress=progress, piece=piece)
     import tempfile
 
     from rostool.bag.remote import upload
 
     with tempfile.TemporaryDirectory(prefix="rostool-export-") as stage:
-        with _fewer_collections():
+        with fewer_collections():
             result = export_bag(
                 item.path, replace(options, out=Path(stage)), partition=partition, progress=progress
             )
@@ -150,7 +158,7 @@ YOUNG_COLLECTION_FROM = 50_000  # allocations (Python's default: 700)
 
 
 @contextmanager
-def _fewer_collections() -> Iterator[None]:
+def fewer_collections() -> Iterator[None]:
     """Python's cyclic garbage collector, made cheap for one export. A batch of decoded messages (a type
     decoded one by one: millions of small objects) outlives young collections, so with the default
     thresholds full collections kept coming, each walking every object of the process: more than 40 % of

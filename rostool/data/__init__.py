@@ -64,9 +64,13 @@ def _read_batch(batch: Any, topics: tuple[str, ...], distro: str) -> Any:
     """One Ray task's work: bags' paths -> their topics' rows, with `bag` and `topic` columns."""
     import pyarrow as pa
 
+    from rostool.bag.export_many import fewer_collections
+
     tables = []
     for path, bag in zip(batch.column("path").to_pylist(), batch.column("bag").to_pylist(), strict=True):
-        for topic, table in read_bag_tables(path, topics, distro).items():
+        with fewer_collections():
+            read = read_bag_tables(path, topics, distro)
+        for topic, table in read.items():
             table = table.append_column("bag", pa.array([bag] * table.num_rows, pa.string()))
             tables.append(table.append_column("topic", pa.array([topic] * table.num_rows, pa.string())))
     if not tables:
