@@ -154,6 +154,17 @@ def test_a_ray_cluster_by_address_and_a_bad_bag(tmp_path: Path, ray_env: dict[st
         }  # each good bag's rows
 
 
+def test_a_cluster_address_nothing_answers_at_is_one_line(tmp_path: Path, ray_env: dict[str, str]) -> None:
+    address = f"127.0.0.1:{free_port()}"
+    args = ["bag", "export", str(_fleet(tmp_path)), "-o", str(tmp_path / "out"), "--engine", "ray"]
+    failed = rostool([*args, "--ray-address", address], ray_env, timeout=60)
+    assert failed.returncode == 1
+    assert failed.stderr.strip().splitlines() == [
+        f"rostool: cannot reach the Ray cluster at {address}: Connection refused"
+    ], failed.stderr
+    assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())
+
+
 API_SCRIPT = """
 import collections, json, sys
 import pyarrow.parquet as pq

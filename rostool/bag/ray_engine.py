@@ -14,6 +14,7 @@ from __future__ import annotations
 import logging
 import os
 import secrets
+import socket
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from typing import Any, TypeVar
@@ -42,6 +43,8 @@ def connect(address: str | None) -> Any:
         raise RostoolError(f"the ray module is not installed: {RAY_HINT}") from err
     if ray.is_initialized():
         return ray
+    if address:
+        _reachable(address)
     quiet: dict[str, Any] = {"logging_level": logging.ERROR, "log_to_driver": False}
     try:
         if address:
@@ -94,6 +97,19 @@ def runner(address: str | None) -> Callable[..., Results[Any]]:
                 raise
 
     return run
+
+
+def _reachable(address: str) -> None:
+    """A one-line error now for a cluster nothing answers at: Ray would retry for minutes, printing its own
+    log lines on stderr."""
+    host, _, port = address.rpartition(":")
+    if "://" in address or not port.isdigit():
+        return  # ray://... (Ray Client) and the like: Ray's own checks
+    try:
+        with socket.create_connection((host.strip("[]"), int(port)), timeout=10):
+            pass
+    except OSError as err:
+        raise RostoolError(f"cannot reach the Ray cluster at {address}: {err.strerror or err}") from err
 
 
 def _is_loopback(address: str) -> bool:
