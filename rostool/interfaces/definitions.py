@@ -25,7 +25,6 @@ from typing import Any
 
 from rosbags.interfaces import Nodetype
 from rosbags.typesys import get_types_from_msg
-from yaml import YAMLError, safe_load
 
 import rostool.interfaces.rosbags_fix  # noqa: F401 - must run before types are registered
 from rostool.errors import RostoolError
@@ -84,6 +83,8 @@ def _strip_comment(line: str) -> str:
 
 def default_values(text: str, origin: str = "") -> dict[str, Any]:
     """The fields of one message section that have a default (`TYPE NAME VALUE`), with their values."""
+    from yaml import YAMLError, safe_load
+
     found: dict[str, Any] = {}
     for line in text.split("\n"):
         parts = _strip_comment(line).strip().split(None, 2)

@@ -10,7 +10,6 @@ import time
 from typing import TYPE_CHECKING, Any
 
 from rostool.errors import RostoolError
-from rostool.interfaces.fill import build_message
 
 if TYPE_CHECKING:
     from rostool.graph.base import ParameterDescriptor
@@ -83,6 +82,8 @@ def typed_fields(kind: int, value: Any) -> dict[str, Any]:
 
 
 def from_python(store: Any, value: Any) -> Any:
+    from rostool.interfaces.fill import build_message  # numpy: ~0.1 s of CPU that listings do not need
+
     return build_message(store, VALUE_TYPE, value_fields(value))
 
 
@@ -119,6 +120,8 @@ class ParameterClient:
                 f"node {self.node} does not serve {verb}: no server of {client.service} matched within "
                 f"{self._timeout:g} s (see `rostool service list`)"
             )
+        from rostool.interfaces.fill import build_message
+
         store = self._graph.types.store
         return client.call(build_message(store, client.request_type, request), self._timeout)
 
