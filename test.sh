@@ -4,6 +4,11 @@
 # ROS 2 peers (rclpy of Jazzy and Kilted with Fast DDS), each in its own cached venv.
 set -euo pipefail
 cd "$(dirname "$0")"
+# The suite starts thousands of Python processes importing the same modules: let them keep bytecode
+# (rostool's __pycache__, pytest's rewritten test modules) even where the caller's environment turns that
+# off (PYTHONDONTWRITEBYTECODE=1, as some containers set): else every rostool run compiles the modules it
+# imports (~25 ms of CPU) and every xdist worker compiles the tests (~2.4 s) (CONTRIBUTING, "Test suite timing")
+unset PYTHONDONTWRITEBYTECODE
 
 ros_packages=(ros-core python3-rospy python3-actionlib python3-actionlib-tools python3-std-msgs
   python3-geometry-msgs python3-sensor-msgs ros-std-srvs python3-std-srvs)
