@@ -16,6 +16,7 @@ from tests.support import (
     debian_popen,
     free_port,
     master_answers,
+    master_has_param,
     require_ros1_peers,
     ros1_env,
     rostool_popen,
@@ -125,9 +126,9 @@ def debian_roscore(ros_env: dict[str, str]) -> Iterator[dict[str, str]]:
     port = ros_env["ROS_MASTER_URI"].rsplit(":", 1)[1]
     proc = debian_popen(["roscore", "-p", port], ros_env)
     _start_master(proc, ros_env)
-    from tests.support import debian
-
-    wait_until(lambda: debian(["rosparam", "get", "/rosdistro"], ros_env).returncode == 0, 20)
+    # roslaunch sets /rosdistro once the master answers; asked as `rosparam get` asks (getParam), in
+    # process: a rosparam run per poll cost 0.2-0.3 s of CPU each
+    wait_until(lambda: master_has_param(ros_env["ROS_MASTER_URI"], "/rosdistro"), 20)
     yield ros_env
     stop(proc, timeout=10)
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import os
 import random
 import shutil
@@ -21,17 +22,23 @@ DEBIAN_PYTHON = "/usr/bin/python3"
 TESTDATA = Path(__file__).resolve().parent.parent.parent / "shared" / "testdata"
 
 
+@functools.cache
+def _ros1_peers_installed() -> bool:
+    """Asked once per test process: the probe costs 0.2 s of CPU (1 s of wall under load), and ROS 1
+    tests ask before every master they start."""
+    if shutil.which("rosmaster") is None or not os.path.exists(DEBIAN_PYTHON):
+        return False
+    probe = subprocess.run(
+        [DEBIAN_PYTHON, "-c", "import rospy, rostopic, rosparam, rosnode"],
+        capture_output=True,
+        env=debian_env({}),
+    )
+    return probe.returncode == 0
+
+
 def require_ros1_peers() -> None:
     """Debian's ROS 1 tools must be here; in CI their absence fails the test, elsewhere it skips."""
-    ok = shutil.which("rosmaster") is not None and os.path.exists(DEBIAN_PYTHON)
-    if ok:
-        probe = subprocess.run(
-            [DEBIAN_PYTHON, "-c", "import rospy, rostopic, rosparam, rosnode"],
-            capture_output=True,
-            env=debian_env({}),
-        )
-        ok = probe.returncode == 0
-    if not ok:
+    if not _ros1_peers_installed():
         message = "Debian's ROS 1 peers (ros-core, python3-rospy) are not installed: run ./test.sh as root"
         if IN_CI:
             pytest.fail(message)
@@ -159,6 +166,15 @@ def wait_until(predicate: Callable[[], bool], timeout: float = 10.0, interval: f
 def master_answers(uri: str) -> bool:
     try:
         code, _msg, _pid = xmlrpc.client.ServerProxy(uri).getPid("/test")
+        return bool(code == 1)
+    except (OSError, xmlrpc.client.Error):
+        return False
+
+
+def master_has_param(uri: str, name: str) -> bool:
+    """Whether the ROS 1 master at `uri` holds parameter `name` (XML-RPC getParam, as rosparam asks)."""
+    try:
+        code, _msg, _value = xmlrpc.client.ServerProxy(uri).getParam("/test", name)
         return bool(code == 1)
     except (OSError, xmlrpc.client.Error):
         return False
