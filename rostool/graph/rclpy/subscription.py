@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING, Any
 
 from rostool.graph.rclpy import types as rtypes
 from rostool.graph.rclpy.qos import to_rclpy
-from rostool.graph.ros2_base.subscription import REJOIN_POLL, DrainingSubscription
+from rostool.graph.ros2_base.subscription import DrainingSubscription
 
 if TYPE_CHECKING:
     from rostool.graph.rclpy.host import RclpyHost
@@ -52,14 +52,10 @@ class RclpySubscription(DrainingSubscription):
             event_callbacks=events,
         )
         taking = self._detach(self._reader)
-        rejoin = taking and self._rejoins()
+        watch = self._static_type is not None  # until its first message: publishers of another type
         while not self._closed.is_set():
             if taking:
-                if self._take_until_event(self._reader, cls, on_bytes, rejoin):
-                    self._rejoined = True  # see DrainingSubscription._rejoins
-                    self._drop()
-                    return profile
-                rejoin = False
+                self._take_until_event(self._reader, cls, on_bytes, watch)
             else:
                 self._incompatible.wait()
             if self._closed.is_set():
@@ -93,10 +89,11 @@ class RclpySubscription(DrainingSubscription):
         return True
 
     def _take_until_event(
-        self, reader: Any, cls: Any, on_bytes: Callable[[bytes], None], rejoin: bool = False
-    ) -> bool:
+        self, reader: Any, cls: Any, on_bytes: Callable[[bytes], None], watch: bool = False
+    ) -> None:
         """Take messages as they come, and run the QoS event callbacks, until closed or a QoS event calls
-        for a look. With `rejoin`: True (at once) when a publisher is known before any message came."""
+        for a look; with `watch` (a static topic), look for publishers of another type until a message
+        comes."""
         wait_set, handle, handlers = self._wait_set, reader.handle, list(reader.event_handlers)
         with contextlib.ExitStack() as held:  # in use: not destroyed while waited on
             held.enter_context(handle)
@@ -107,23 +104,22 @@ class RclpySubscription(DrainingSubscription):
                 wait_set.add_subscription(handle)
                 for handler in handlers:
                     handler.add_to_wait_set(wait_set)
-                wait_set.wait(round(REJOIN_POLL * 1e9) if rejoin else 100_000_000)  # close noticed in time
+                wait_set.wait(100_000_000)  # 0.1 s: close is noticed in time
                 for handler in handlers:
                     if handler.is_ready(wait_set):
                         data = handler.take_data()
                         if data and handler.callback is not None:
                             handler.callback(data)
                 if not wait_set.get_ready_entities("subscription"):
-                    if rejoin and (reader.get_publisher_count() > 0 or self._static_writer_known()):
-                        return True
+                    if watch:
+                        self._static_writer_known()  # warns about publishers of another type
                     continue
-                rejoin = False
+                watch = False
                 while True:
                     taken = handle.take_message(cls, True)
                     if taken is None:
                         break
                     on_bytes(taken[0])
-        return False
 
     def _matched_count(self) -> int | None:
         try:

@@ -160,14 +160,15 @@ class DrainingSubscription:
         return store_name, profile
 
     def _rejoins(self) -> bool:
-        """Whether to make the reader again once its first publisher is known (discovery shows it, or the
-        reader matched it), before any message came: a reader made before any publisher was known (a
-        static topic's). Measured with Fast DDS publishers: a new participant learns of a reader that was
-        there before it only on a discovery heartbeat, about 1 s later from rostool's Cyclone participant
-        and about 2.7 s later from a Fast DDS one (rclpy backend), but of a reader made after it at once;
-        and a Fast DDS writer that did match Cyclone's reader first sends before Cyclone knows the writer,
-        whose reader then takes nothing until the writer's next heartbeat. A reader made once the writer
-        is known is matched and in step at once, as any other subscription. Once."""
+        """Whether the transport makes the reader again once its first publisher is known (discovery shows
+        it, or the reader matched it), before any message came: a reader made before any publisher was
+        known (a static topic's). The DDS transport does (measured with Fast DDS publishers): a new Fast
+        DDS participant learns of a Cyclone reader that was there before it only on a discovery heartbeat,
+        about 1 s later, but of one made after it at once; and a Fast DDS writer that did match the early
+        reader first sends before Cyclone knows the writer, whose reader then takes nothing until the
+        writer's next heartbeat. A reader made once the writer is known is matched and in step at once.
+        The rclpy transport does not: a Fast DDS reader catches up with a writer that matched it first,
+        and making it again then lost the messages it was catching up on. Once."""
         return self._static_type is not None and self._expected == 0 and not self._rejoined
 
     def _static_writer_known(self) -> bool:
