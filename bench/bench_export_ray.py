@@ -3,7 +3,7 @@ already running local head by address), on a fleet of bags and on one big bag cu
 
 Bags are generated under --tmp (removed afterwards): rosbag2 .mcap bags mixing sensor_msgs/Imu (decoded
 column-wise: ~1 M msg/s on one core) and tf2_msgs/TFMessage (a sequence of messages, decoded one by one:
-~20 k msg/s), the CPU-bound mix where more cores pay.
+~40 k msg/s), the CPU-bound mix where more cores pay.
 - fleet: --bags bags (copies of one) of --imu Imu and --tf TFMessage each;
 - single: one ~1 GB bag of --single-imu Imu alone (fixed layout), and one of --mix-imu Imu and --mix-tf
   TFMessage; each exported whole (-j 1), by the cost rule (-j 2: export_cost.py decides whether to cut),

@@ -6,7 +6,8 @@ end of the file): each wanted channel's message count times the cost of its type
 (bench/RESULTS.md, bench_export_ray.py): a type whose fields are numbers, strings, fixed or primitive arrays
 (Imu, Odometry, JointState...) decodes column-wise, ~0.5 us a message plus ~1 ns a byte written; a type with
 sequences of messages (tf2_msgs/TFMessage, a MarkerArray) or a schema that is not a .msg text is
-deserialized message by message, ~50 us a message. Any other bag (.bag, .db3, object storage) counts its
+deserialized message by message, ~25 us a message (50 us while a reference cycle kept each batch alive
+for Python's full collections). Any other bag (.bag, .db3, object storage) counts its
 bytes at the rate that made 64 MiB worth a second worker before (`many.PARALLEL_FROM_BYTES`).
 """
 
@@ -17,7 +18,7 @@ from pathlib import Path
 from typing import Any
 
 FLAT_MESSAGE = 0.5e-6  # seconds per message of a column-wise type
-NESTED_MESSAGE = 50e-6  # seconds per message decoded one by one
+NESTED_MESSAGE = 25e-6  # seconds per message decoded one by one (100,000 TFMessage: 2.2-2.6 s CPU)
 BYTE = 1e-9  # seconds per byte of messages (copied, compressed, written)
 PARALLEL_FROM = 1.5  # seconds of work from which worker processes pay off (their start-up is ~0.5 s)
 PIECE_SECONDS = 3.0  # the least work a piece of a cut bag holds: its worker's start-up and the join pay off
