@@ -103,12 +103,12 @@ def kind_of(cmdline: list[str]) -> str:
 
 class KindSorter:
     """Moves each process of the test, once it has exec'd, into a cgroup named by its kind (its children
-    inherit that one, and are moved again when they exec something else, as a daemon a verb starts). What
+    inherit that one until they exec something else: a daemon a verb starts is sorted on its own). What
     runs before a process is sorted (at most one poll, 50 ms) stays with its parent's kind."""
 
     def __init__(self, group: Path) -> None:
         self.group = group
-        self.cmdlines: dict[str, bytes] = {}
+        self.sorted: set[str] = set()
         self.started: dict[str, int] = defaultdict(int)  # processes sorted per kind
         self.me = str(os.getpid())  # the worker stays in `pytest`
         self.done = threading.Event()
@@ -123,6 +123,8 @@ class KindSorter:
                         self._sort(pid, kind.name)
 
     def _sort(self, pid: str, now: str) -> None:
+        if pid in self.sorted:
+            return  # a process is sorted once, when it first runs a program of its own
         try:
             raw = Path(f"/proc/{pid}/cmdline").read_bytes()
             ppid = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[1]
@@ -130,9 +132,9 @@ class KindSorter:
                 return  # forked, not exec'd (yet)
         except OSError:
             return  # gone already
-        if not raw or self.cmdlines.get(pid) == raw:
-            return  # a zombie, or sorted already
-        self.cmdlines[pid] = raw
+        if not raw:
+            return  # a zombie
+        self.sorted.add(pid)
         kind = kind_of(raw.decode(errors="replace").rstrip("\0").split("\0"))
         self.started[kind] += 1
         if kind != now:
