@@ -22,11 +22,20 @@ ToolPopen = Callable[[list[str]], "subprocess.Popen[str]"]
 # the middleware's own log lines (Jazzy's rmw_fastrtps warns that FASTRTPS_DEFAULT_PROFILES_FILE, which the
 # peers' environment sets for Fast DDS 2, is deprecated): the user's RMW speaking, not rostool
 RMW_LOG = re.compile(r"^\[(WARN|INFO)\] \[[\d.]+\] \[rmw_")
+# Fast DDS's own log lines, colored even into a pipe (Kilted's Fast DDS 3 under load: "2026-11-28
+# 01:09:06.099 [TYPELOOKUP_SERVICE_REPLY_LISTENER Error] Error registering remote type: ...")
+FASTDDS_LOG = re.compile(r"^\d{4}-\d\d-\d\d \d\d:\d\d:\d\d\.\d+ \[\w+ (Error|Warning|Info)\] ")
+ANSI = re.compile(r"\x1b\[[\d;]*m")
+
+
+def middleware_line(line: str) -> bool:
+    """Whether a stderr line is the middleware's own log (the user's RMW speaking, not rostool)."""
+    return bool(RMW_LOG.match(line) or FASTDDS_LOG.match(ANSI.sub("", line)))
 
 
 def rostool_lines(stderr: str) -> list[str]:
     """stderr's lines without the RMW's own log lines."""
-    return [line for line in stderr.strip().splitlines() if not RMW_LOG.match(line)]
+    return [line for line in stderr.strip().splitlines() if not middleware_line(line)]
 
 
 @pytest.fixture(params=BACKENDS)
