@@ -19,6 +19,7 @@ from pathlib import Path
 
 import pytest
 
+from tests.ros2_backends import middleware_line
 from tests.ros2_peers import (
     RclpyPeer,
     assert_loopback_only,
@@ -38,17 +39,12 @@ def docs(text: str) -> list[str]:
     return [doc.strip() for doc in text.split("---") if doc.strip()]
 
 
-# the middleware's own log lines (Jazzy's rmw_fastrtps warns that FASTRTPS_DEFAULT_PROFILES_FILE, which the
-# peers' environment sets for Fast DDS 2, is deprecated): the user's RMW speaking, not rostool
-RMW_LOG = re.compile(r"^\[(WARN|INFO)\] \[[\d.]+\] \[rmw_")
-
-
 def one_error_line(done: subprocess.CompletedProcess[str], *words: str) -> str:
     assert done.returncode != 0, done.stdout
     lines = [
         line
         for line in done.stderr.strip().splitlines()
-        if not line.startswith("WARNING: ") and not RMW_LOG.match(line)
+        if not line.startswith("WARNING: ") and not middleware_line(line)
     ]
     assert len(lines) == 1, done.stderr
     assert "Traceback" not in done.stderr
