@@ -177,9 +177,11 @@ def bench_relays(tools: list[Tool], count: int) -> None:
         good = sum(timed([*command, "topic", "echo", "/t", "--once"], env)[2] == 0 for _ in range(count))
         last = _daemon(command, env)
         same = "same daemon" if first["pid"] == last["pid"] else "REPLACED (another build): not comparable"
-        print(f"| {label}: {count} relayed echo --once | RSS {first['VmRSS']} -> {last['VmRSS']} | threads "
-              f"{first['Threads']} -> {last['Threads']} | relays left {len(last['relays'])}, {same} | "
-              f"{good}/{count} ok |")
+        print(
+            f"| {label}: {count} relayed echo --once | RSS {first['VmRSS']} -> {last['VmRSS']} | threads "
+            f"{first['Threads']} -> {last['Threads']} | relays left {len(last['relays'])}, {same} | "
+            f"{good}/{count} ok |"
+        )
 
 
 def _daemon(command: list[str], env: dict[str, str]) -> dict[str, Any]:

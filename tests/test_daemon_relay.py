@@ -70,7 +70,10 @@ def started_daemon(tool: Tool) -> None:
 
 
 def test_echo_through_the_daemon_and_its_reader_leaves_with_the_verb(
-    tool: Tool, tool_popen: ToolPopen, start_peer: Callable[..., RclpyPeer], graph_env: dict[str, str]  # noqa: F811
+    tool: Tool,
+    tool_popen: ToolPopen,
+    start_peer: Callable[..., RclpyPeer],
+    graph_env: dict[str, str],  # noqa: F811
 ) -> None:
     talker = start_peer("--name", "talker", "--talk", "/t", "--rate", "20", "--watch")
     started_daemon(tool)
@@ -100,7 +103,10 @@ def test_echo_through_the_daemon_and_its_reader_leaves_with_the_verb(
 
 
 def test_no_daemon_echo_subscribes_itself(
-    tool: Tool, tool_popen: ToolPopen, start_peer: Callable[..., RclpyPeer], graph_env: dict[str, str]  # noqa: F811
+    tool: Tool,
+    tool_popen: ToolPopen,
+    start_peer: Callable[..., RclpyPeer],
+    graph_env: dict[str, str],  # noqa: F811
 ) -> None:
     talker = start_peer("--name", "talker", "--talk", "/t", "--rate", "20", "--watch")
     started_daemon(tool)
@@ -116,7 +122,10 @@ def test_no_daemon_echo_subscribes_itself(
 
 
 def test_two_verbs_at_once_each_get_their_messages(
-    tool: Tool, tool_popen: ToolPopen, start_peer: Callable[..., RclpyPeer], graph_env: dict[str, str]  # noqa: F811
+    tool: Tool,
+    tool_popen: ToolPopen,
+    start_peer: Callable[..., RclpyPeer],
+    graph_env: dict[str, str],  # noqa: F811
 ) -> None:
     start_peer("--name", "talker", "--talk", "/t", "--rate", "20")
     start_peer("--name", "other", "--talk", "/u", "--rate", "20")
@@ -139,7 +148,10 @@ def test_two_verbs_at_once_each_get_their_messages(
 
 @pytest.mark.parametrize("distro", ["jazzy"])
 def test_a_relay_outlives_its_daemon(
-    tool: Tool, tool_popen: ToolPopen, start_peer: Callable[..., RclpyPeer], graph_env: dict[str, str]  # noqa: F811
+    tool: Tool,
+    tool_popen: ToolPopen,
+    start_peer: Callable[..., RclpyPeer],
+    graph_env: dict[str, str],  # noqa: F811
 ) -> None:
     start_peer("--name", "talker", "--talk", "/t", "--rate", "20")
     started_daemon(tool)
@@ -158,7 +170,9 @@ def test_a_relay_outlives_its_daemon(
 
 @pytest.mark.parametrize("distro", ["jazzy"])
 def test_a_qos_no_publisher_serves_fails_as_directly(
-    tool: Tool, start_peer: Callable[..., RclpyPeer], graph_env: dict[str, str]  # noqa: F811
+    tool: Tool,
+    start_peer: Callable[..., RclpyPeer],
+    graph_env: dict[str, str],  # noqa: F811
 ) -> None:
     start_peer("--name", "talker", "--talk", "/t", "--rate", "20", "--best-effort")
     started_daemon(tool)
@@ -172,7 +186,8 @@ def test_a_qos_no_publisher_serves_fails_as_directly(
 
 
 def test_a_type_only_the_publisher_knows_comes_with_the_relay(
-    graph_env: dict[str, str], tmp_path: Path  # noqa: F811
+    graph_env: dict[str, str],
+    tmp_path: Path,  # noqa: F811
 ) -> None:
     sources = interface_workspace(tmp_path / "ws", SOURCES)
     args = ["topic", "pub", "/status", "robo_msgs/msg/Status", STATUS, "-r", "10", "--interfaces"]
@@ -195,7 +210,8 @@ def test_a_type_only_the_publisher_knows_comes_with_the_relay(
 
 @pytest.mark.parametrize("distro", ["jazzy"])
 def test_bag_play_through_a_serving_daemon_publishes_the_bags_types(
-    start_peer: Callable[..., RclpyPeer], graph_env: dict[str, str]  # noqa: F811
+    start_peer: Callable[..., RclpyPeer],
+    graph_env: dict[str, str],  # noqa: F811
 ) -> None:
     # the verb's types are made before its direct graph (which only publishing needs): what play
     # registers in them must reach the graph that publishes

@@ -69,7 +69,6 @@ class PlayControls:
         if self.controls is not None:
             self.controls.close()
 
-
     def _command(self, command: Command, now: float) -> None:
         """A request of rosbag2's control services (player_services.py), done as the keys do it."""
         clock, name, value = self.clock, command.name, command.value

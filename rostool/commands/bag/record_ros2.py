@@ -86,7 +86,9 @@ RECORD_LISTS = (
 @click.option("--use-sim-time", is_flag=True,
               help="Stamp messages with /clock's time; none is written before the first.")  # fmt: skip
 @click.option(
-    "--node-name", default="rosbag2_recorder", show_default=True,
+    "--node-name",
+    default="rosbag2_recorder",
+    show_default=True,
     help="The recorder's node name: --snapshot-mode serves NAME/snapshot.",
 )
 @click.option(
