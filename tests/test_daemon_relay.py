@@ -186,8 +186,8 @@ def test_a_qos_no_publisher_serves_fails_as_directly(
 
 
 def test_a_type_only_the_publisher_knows_comes_with_the_relay(
-    graph_env: dict[str, str],
-    tmp_path: Path,  # noqa: F811
+    graph_env: dict[str, str],  # noqa: F811
+    tmp_path: Path,
 ) -> None:
     sources = interface_workspace(tmp_path / "ws", SOURCES)
     args = ["topic", "pub", "/status", "robo_msgs/msg/Status", STATUS, "-r", "10", "--interfaces"]
