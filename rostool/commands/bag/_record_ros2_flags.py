@@ -137,9 +137,9 @@ def check_flags(flags: RecordFlags) -> None:
             click.echo(f"[WARN] [ros2bag]: {text}", err=True)
 
 
-def static_topics(flags: RecordFlags) -> dict[str, str]:
-    """--static-topics-path's topics and types, but those the exclusions leave out (as rosbag2 applies them
-    above its static list): -x, --exclude-topics, --exclude-topic-types."""
+def static_topics(flags: RecordFlags, rules: TopicRules) -> dict[str, str]:
+    """--static-topics-path's topics and types, but those the exclusions of `rules` leave out (as rosbag2
+    applies them above its static list): -x, --exclude-topics, --exclude-topic-types."""
     if flags.static_topics_path is None:
         return {}
     from rostool.bag.static_topics import load_static_topics
@@ -148,9 +148,9 @@ def static_topics(flags: RecordFlags) -> dict[str, str]:
     def absolute(name: str) -> str:  # relative names are under the root namespace, as the recorder's own
         return name if name.startswith(("/", "~")) else "/" + name
 
-    exclude_regex = compile_pattern(flags.exclude_regex, "-x/--exclude-regex")
-    exclude_topics = {absolute(t) for t in topic_list(flags.exclude_topics)}
-    exclude_types = {to_store_name(t) for t in topic_list(flags.exclude_topic_types)}
+    exclude_regex = rules.exclude_regex
+    exclude_topics = {absolute(t) for t in rules.exclude_topics}
+    exclude_types = {to_store_name(t) for t in rules.exclude_types}
     kept = {}
     for topic, type_name in load_static_topics(flags.static_topics_path).items():
         name = absolute(topic)

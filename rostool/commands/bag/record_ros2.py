@@ -165,7 +165,8 @@ def record(ctx: click.Context, flags: RecordFlags) -> None:
     from rostool.commands.bag._recording import RecordRequest, run_record
 
     check_flags(flags)
-    static = static_topics(flags)  # a bad file is refused before anything is made
+    rules = topic_rules(flags)
+    static = static_topics(flags, rules)  # a bad file is refused before anything is made
     if flags.output and flags.output_name:
         raise RostoolError("choose one of -o/--output and -O/--output-name")
     output = (
@@ -205,7 +206,7 @@ def record(ctx: click.Context, flags: RecordFlags) -> None:
     overrides = qos_overrides(flags.qos_profile_overrides_path)
     if overrides is not None and flags.qos.given:
         raise RostoolError("choose one of --qos-profile-overrides-path and --qos-*")
-    selector = TopicSelector(topic_rules(flags))
+    selector = TopicSelector(rules)
     options = RecordOptions(
         topics=flags.topic_names,  # subscribed at once: a publisher that appears later is matched by DDS
         output_name=output if single else None,
