@@ -8,13 +8,28 @@ from __future__ import annotations
 
 import math
 import threading
+import time
 from collections import deque
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 from rostool.output.rate_text import format_bytes
 
-__all__ = ["RateMeter", "RunningStats", "SizeMeter", "Summary", "format_bytes", "fresh_rates"]
+if TYPE_CHECKING:
+    from rostool.graph.base import Received
+
+__all__ = [
+    "RateMeter", "RunningStats", "SizeMeter", "Summary", "arrival_clock", "format_bytes", "fresh_rates",
+]  # fmt: skip
+
+
+def arrival_clock() -> Callable[[Received], float]:
+    """When a message reached its reader (the graph daemon's, when relayed), on this process's monotonic
+    clock: not when the verb's callback ran, or a relayed frame's trip over the socket would show as
+    jitter."""
+    offset = time.time() - time.monotonic()
+    return lambda received: received.recv_time_ns / 1e9 - offset
 
 
 @dataclass

@@ -37,7 +37,7 @@ def bw(
       rostool topic bw /scan /odom
       rostool topic bw --all --duration 5
     """
-    from rostool.graph.rates import SizeMeter
+    from rostool.graph.rates import SizeMeter, arrival_clock
     from rostool.output.rate_text import bandwidth_report
 
     require_topics(names, all_topics)
@@ -45,13 +45,13 @@ def bw(
         graph.use_qos(qos)
         ros2 = graph.style == "ros2"
         meters = {topic: SizeMeter(window) for topic in chosen_topics(graph, names, all_topics)}
-        offset = time.time() - time.monotonic()  # arrivals as the reader saw them (see hz)
+        arrival = arrival_clock()
         for topic_name, meter in meters.items():
             if len(meters) > 1 and graph.topic_type(topic_name) is None:
                 click.echo(f"WARNING: topic [{topic_name}] does not appear to be published yet", err=True)
             graph.subscribe(
                 topic_name,
-                lambda r, meter=meter: meter.arrived(r.recv_time_ns / 1e9 - offset, len(r.payload)),
+                lambda r, meter=meter: meter.arrived(arrival(r), len(r.payload)),
                 lambda e: click.echo(f"rostool: {e}", err=True),
             )
             if not as_json:

@@ -75,12 +75,12 @@ def hz(
 def _counter(
     arrived: Callable[[float], None], keep: Callable[[Any], bool] | None
 ) -> Callable[[Received], None]:
-    # when the message reached its reader (the graph daemon's, when relayed) on this process's monotonic
-    # clock, not when this callback ran: a relayed frame's trip over the socket would show as jitter
-    offset = time.time() - time.monotonic()
+    from rostool.graph.rates import arrival_clock
+
+    arrival = arrival_clock()
 
     def on_message(received: Received) -> None:
         if keep is None or keep(received.decode()):
-            arrived(received.recv_time_ns / 1e9 - offset)
+            arrived(arrival(received))
 
     return on_message
