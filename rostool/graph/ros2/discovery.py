@@ -32,6 +32,11 @@ POLL_SECONDS = 0.01  # how often a settle looks: the quiet spell is measured at 
 # ros_discovery_info's reader is made once the participants seen have described their endpoints, at the
 # latest this long after discovery started (see GraphCache.defer_info_reader)
 INFO_READER_LATEST = 2.5
+# A participant whose ros_discovery_info writer is known this long without its sample is asked again by a
+# new reader (see GraphCache._prompt_newcomers), at most once every PROMPT_EVERY seconds
+PROMPT_AFTER = 0.1
+PROMPT_EVERY = 0.25
+PROMPT_GIVE_UP = 5.0  # by then the writer's own heartbeat (3 s) has brought the sample, if it ever comes
 
 
 @dataclass
@@ -206,6 +211,10 @@ class GraphCache:
         self._subscriptions_reader = BuiltinDataReader(dp, BuiltinTopicDcpsSubscription)
         self.info_reader = info_reader
         self._make_info_reader: Callable[[], Any] | None = None
+        self._reader_factory: Callable[[], Any] | None = None
+        self._prompt: Any = None  # a ros_discovery_info reader made for newcomers whose sample was missed
+        self._prompt_made = 0.0
+        self._unnamed: dict[bytes, float] = {}  # participant -> when its ros_discovery_info writer was seen
         self.participants: dict[bytes, bytes] = {}  # GUID -> USER_DATA
         self.first_seen: dict[bytes, float] = {}
         self.endpoints: dict[bytes, Endpoint] = {}
@@ -226,6 +235,7 @@ class GraphCache:
                     changed |= self.participants.pop(key, None) is not None
                     self.nodes.pop(key, None)
                     self.first_seen.pop(key, None)  # a long-lived cache keeps nothing of the gone
+                    self._unnamed.pop(key, None)
                     continue
                 if key not in self.participants:
                     changed = True
@@ -248,8 +258,11 @@ class GraphCache:
                         dds.user_data_of(sample.qos), is_writer,
                     )  # fmt: skip
                     changed = True
+                    if is_writer and sample.topic_name == DISCOVERY_TOPIC and participant != self.own:
+                        self._unnamed.setdefault(participant, time.monotonic())
             if self._make_info_reader is not None and self._info_reader_due():
                 self.info_reader, self._make_info_reader = self._make_info_reader(), None
+                self._prompt_made = time.monotonic()  # it asks every writer known so far
             if changed:
                 self.changed = time.monotonic()
             if self._poll_info():
@@ -257,6 +270,7 @@ class GraphCache:
                 changed = True
             for gone in [key for key in self.nodes if key not in self.participants]:
                 del self.nodes[gone]  # a leaver's last ros_discovery_info may come after it is gone
+            self._prompt_newcomers()
         return changed
 
     def defer_info_reader(self, make: Callable[[], Any]) -> None:
@@ -270,21 +284,61 @@ class GraphCache:
             self._make_info_reader = make
         self.poll()
 
+    def prompt_with(self, make: Callable[[], Any]) -> None:
+        """`make()` makes one more ros_discovery_info reader, for newcomers whose sample was missed (see
+        `_prompt_newcomers`)."""
+        with self._lock:
+            self._reader_factory = make
+
     def _info_reader_due(self) -> bool:
         if time.monotonic() - self.started >= INFO_READER_LATEST:
             return True
         return any(key != self.own for key in self.participants) and self._described(False)
 
+    def _prompt_newcomers(self) -> None:
+        """Ask again for the ros_discovery_info of participants whose writer is known but whose sample has
+        not come. A Fast DDS writer sends its sample to a reader as soon as it learns of it, often before
+        this participant has learnt of the writer (Fast DDS describes its endpoints about 1 s after meeting
+        a participant), which drops it; the next chance is the writer's heartbeat, every 3 s, and a node
+        living a few seconds may never be named. A reader made once the writer is known is matched with it
+        at once, and the writer sends its sample to that new reader at once (as to the deferred first
+        reader). One such reader at a time, replaced for later newcomers, deleted once none is waiting."""
+        if self._reader_factory is None or self.info_reader is None:
+            return
+        now = time.monotonic()
+        for done in [k for k, at in self._unnamed.items() if k in self.nodes or now - at > PROMPT_GIVE_UP]:
+            del self._unnamed[done]
+        if not self._unnamed:
+            self._drop_prompt()
+            return
+        newest = max(self._unnamed.values())
+        due = now - newest >= PROMPT_AFTER and now - self._prompt_made >= PROMPT_EVERY
+        if newest > self._prompt_made and due:
+            self._drop_prompt()
+            self._prompt, self._prompt_made = self._reader_factory(), now
+
+    def _drop_prompt(self) -> None:
+        if self._prompt is not None:
+            prompt, self._prompt = self._prompt, None
+            if self._take_info(prompt):
+                self.nodes_changed = time.monotonic()
+            prompt.__del__()  # cyclonedds deletes an entity only this way (or with its participant)
+
     def _poll_info(self) -> bool:
+        changed = False
+        for reader in (self.info_reader, self._prompt):
+            if reader is not None:
+                changed |= self._take_info(reader)
+        return changed
+
+    def _take_info(self, reader: Any) -> bool:
         from cyclonedds._clayer import ddspy_take  # type: ignore[import-not-found]
         from cyclonedds.core import InstanceState, SampleState, ViewState
 
         mask = SampleState.Any | ViewState.Any | InstanceState.Any
         changed = False
-        if self.info_reader is None:
-            return changed
         while True:
-            samples = ddspy_take(self.info_reader._ref, mask, 64)
+            samples = ddspy_take(reader._ref, mask, 64)
             if isinstance(samples, int) or not samples:
                 return changed
             for data, info in samples:
@@ -294,8 +348,8 @@ class GraphCache:
                     participant, nodes = decode_entities_info(data)
                 except ValueError:
                     continue
-                if participant != self.own:
-                    self.nodes[participant] = nodes
+                if participant != self.own and self.nodes.get(participant) != nodes:
+                    self.nodes[participant] = nodes  # a prompt reader brings the samples already known too
                     changed = True
 
     @staticmethod

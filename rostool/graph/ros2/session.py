@@ -46,11 +46,14 @@ class Session:
         self._info_writer = DataWriter(self.participant.dp, info_topic, qos=writer_qos)
         self.cache = cache if cache is not None else GraphCache(self.participant)
         self.announce()
-        self.cache.defer_info_reader(
-            lambda: DataReader(
+
+        def info_reader() -> Any:
+            return DataReader(
                 self.participant.dp, info_topic, qos=Qos(*reader_qos.policies, Policy.IgnoreLocal.Participant)
             )
-        )
+
+        self.cache.prompt_with(info_reader)
+        self.cache.defer_info_reader(info_reader)
 
     def announce(self) -> None:
         from cyclonedds._clayer import ddspy_write  # type: ignore[import-not-found]

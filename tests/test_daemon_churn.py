@@ -1,0 +1,82 @@
+"""The graph daemon under churn (issue 21): nodes that live only a few seconds are still named, and none is
+listed after it left.
+
+A Fast DDS participant sends its ros_discovery_info sample to a reader as soon as it learns of it, usually
+before the daemon's participant has learnt of its writer (Fast DDS describes its endpoints about 1 s after
+meeting a participant), so the first sample is dropped and the next comes with the writer's heartbeat, 3 s
+later: a node living about that long was often never named. The DDS graph now makes a new reader once such a
+writer is known (discovery.py, `GraphCache._prompt_newcomers`), which the writer answers at once.
+"""
+
+from __future__ import annotations
+
+import subprocess
+from pathlib import Path
+from typing import Any
+
+from tests.ros2_peers import RclpyPeer, WarmDaemon, peer_env, peer_python, serving
+from tests.support import wait_until
+
+# Each brief node lives LIFE seconds from its context's start: longer than the daemon needs to learn its
+# endpoints and ask (about 1.2 s), shorter than the first heartbeat of its ros_discovery_info writer (3 s),
+# which was the only way its name came before.
+LIFE = 2.5
+BRIEF = 4
+BRIEF_NODE = r"""
+import sys, time
+import rclpy
+from std_msgs.msg import String
+name, life = sys.argv[1], float(sys.argv[2])
+context = rclpy.Context()
+rclpy.init(context=context)
+born = time.monotonic()
+node = rclpy.create_node(name, context=context)
+node.create_publisher(String, "/" + name, 10)
+print("up", flush=True)
+time.sleep(max(0.0, life - (time.monotonic() - born)))  # its life is what the test is about
+node.destroy_node()
+rclpy.shutdown(context=context)
+"""
+
+
+def _ask(daemon: WarmDaemon, method: str) -> Any:
+    """A query on the daemon's socket from this process (a `rostool node list` per poll would cost a
+    Python start-up each)."""
+    from rostool.graph.daemon.client import DaemonClient
+    from rostool.graph.daemon.place import DaemonPlace
+
+    (path,) = daemon.run_dir.glob("rostool/*.sock")
+    place = DaemonPlace(path.stem, path, path.with_suffix(".lock"), path.with_suffix(".log"), ())
+    return DaemonClient("auto", daemon.env, place).query(method, [])
+
+
+def _named_while_alive(daemon: WarmDaemon, python: Path, env: dict[str, str], name: str) -> bool:
+    brief = subprocess.Popen([str(python), "-c", BRIEF_NODE, name, str(LIFE)], env=env, text=True,
+                             stdout=subprocess.PIPE, stderr=subprocess.DEVNULL)  # fmt: skip
+    try:
+        assert brief.stdout is not None and brief.stdout.readline().strip() == "up"
+        while brief.poll() is None:
+            if f"/{name}" in _ask(daemon, "node_names"):
+                return True
+        return False
+    finally:
+        brief.communicate(timeout=30)
+
+
+def test_brief_nodes_are_named_while_alive_and_gone_after(
+    distro: str, graph_env: dict[str, str], tmp_path: Path
+) -> None:
+    env = {**graph_env, "ROSTOOL_DAEMON_BUILD": "test-churn"}  # edits to the checkout do not replace it
+    python, fast = peer_python(distro), peer_env(graph_env, tmp_path)
+    with serving(env) as daemon:
+        steady = RclpyPeer(distro, env, tmp_path, ["--name", "steady", "--talk", "/steady"])
+        try:
+            steady.wait_for("ready", timeout=30)
+            daemon.ready()
+            assert wait_until(lambda: "/steady" in _ask(daemon, "node_names"), timeout=30)
+            named = [k for k in range(BRIEF) if _named_while_alive(daemon, python, fast, f"brief_{k}")]
+            assert named == list(range(BRIEF)), f"named while alive: {named} of {BRIEF}"
+            # a reader made for a newcomer brings the leavers' last samples too: none comes back
+            assert wait_until(lambda: _ask(daemon, "node_names") == ["/steady"], timeout=30)
+        finally:
+            steady.stop()
