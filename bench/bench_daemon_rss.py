@@ -49,8 +49,8 @@ def status(command: list[str], env: dict[str, str]) -> dict[str, object]:
     return found if isinstance(found, dict) else {}
 
 
-def slope_mib_per_min(rows: list[tuple[float, int, int]]) -> float:
-    late = [(t, kib / 1024) for t, kib, _nodes in rows if t >= WARMUP]
+def slope_mib_per_min(rows: list[tuple[float, int, int, int]], column: int = 1) -> float:
+    late = [(row[0], row[column] / 1024) for row in rows if row[0] >= WARMUP]
     if len(late) < 2:
         return float("nan")
     mean_t = sum(t for t, _ in late) / len(late)
@@ -82,13 +82,15 @@ class Churned:
             [str(PEERS_DIR / DISTRO / "bin" / "python"), "-c", churner_code(reuse), "1.0", str(ALIVE)],
             env=self.fast, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
         )  # fmt: skip
-        self.rows: list[tuple[float, int, int]] = []
+        self.rows: list[tuple[float, int, int, int]] = []  # seconds, RSS, nodes, malloc in use (KiB)
 
     def sample(self, seconds: float) -> str:
-        graph = status(self.command, self.tool_env).get("graph")
+        found = status(self.command, self.tool_env)
+        graph, memory = found.get("graph"), found.get("memory")
         nodes = int(graph.get("nodes", -1)) if isinstance(graph, dict) else -1
-        self.rows.append((seconds, rss_kib(self.pid), nodes))
-        return f"{self.rows[-1][1] / 1024:.2f}, {nodes}"
+        in_use = int(memory.get("malloc_in_use_kib", -1)) if isinstance(memory, dict) else -1
+        self.rows.append((seconds, rss_kib(self.pid), nodes, in_use))
+        return f"{self.rows[-1][1] / 1024:.2f}, {in_use / 1024:.2f}, {nodes}"
 
     def stop(self) -> None:
         self.churner.terminate()  # rclpy keeps SIGINT for its contexts
@@ -107,7 +109,8 @@ class Churned:
         peak, nodes = max(r[1] for r in rows) / 1024, f"{min(r[2] for r in rows)}-{max(r[2] for r in rows)}"
         return (f"| {self.label} | {late[0][1] / 1024:.2f} MiB | {at2[1] / 1024:.2f} MiB | "
                 f"{rows[-1][1] / 1024:.2f} MiB at {rows[-1][0]:.0f} s | {peak:.2f} MiB | "
-                f"{slope_mib_per_min(rows):+.3f} | {nodes} |")  # fmt: skip
+                f"{slope_mib_per_min(rows):+.3f} | {at2[3] / 1024:.2f} -> {rows[-1][3] / 1024:.2f} MiB, "
+                f"{slope_mib_per_min(rows, 3):+.3f} | {nodes} |")  # fmt: skip
 
 
 def main() -> None:
@@ -123,15 +126,17 @@ def main() -> None:
         graphs.append(Churned("new names", 0, args.backend, scratch))
         graphs.append(Churned(f"{args.reuse} names reused", args.reuse, args.backend, scratch))
         start = time.monotonic()
-        print("| s | " + " | ".join(f"{graph.label}: RSS (MiB), nodes" for graph in graphs) + " |")
+        heads = [f"{graph.label}: RSS, malloc in use (MiB), nodes" for graph in graphs]
+        print("| s | " + " | ".join(heads) + " |")
         while time.monotonic() - start < args.minutes * 60:
             time.sleep(SAMPLE)
             cells = [graph.sample(time.monotonic() - start) for graph in graphs]
             if len(graphs[0].rows) % 6 == 0:
                 print(f"| {time.monotonic() - start:.0f} | " + " | ".join(cells) + " |", flush=True)
         print(f"\n{args.backend} daemon | RSS at 1 min | at {WARMUP:.0f} s | last | max | slope after "
-              f"{WARMUP:.0f} s (MiB/min) | nodes |")  # fmt: skip
-        print("|---|---|---|---|---|---|---|")
+              f"{WARMUP:.0f} s (MiB/min) | "
+              f"malloc in use: {WARMUP:.0f} s -> last, slope | nodes |")  # fmt: skip
+        print("|---|---|---|---|---|---|---|---|")
         for graph in graphs:
             print(graph.summary())
     finally:

@@ -10,12 +10,13 @@ writer is known (discovery.py, `GraphCache._prompt_newcomers`), which the writer
 
 from __future__ import annotations
 
+import json
 import subprocess
 from pathlib import Path
 from typing import Any
 
 from tests.ros2_peers import RclpyPeer, WarmDaemon, peer_env, peer_python, serving
-from tests.support import wait_until
+from tests.support import rostool, wait_until
 
 # Each brief node lives LIFE seconds from its context's start: longer than the daemon needs to learn its
 # endpoints and ask (about 1.2 s), shorter than the first heartbeat of its ros_discovery_info writer (3 s),
@@ -80,3 +81,18 @@ def test_brief_nodes_are_named_while_alive_and_gone_after(
             assert wait_until(lambda: _ask(daemon, "node_names") == ["/steady"], timeout=30)
         finally:
             steady.stop()
+
+
+def test_status_reports_the_daemons_memory(graph_env: dict[str, str]) -> None:
+    """`daemon status --json` gives the resident set (as /proc reads it) and malloc's bytes in use, which
+    tell a leak from the allocator's fragmentation under churn (bench/bench_daemon_rss.py)."""
+    with serving(graph_env) as daemon:
+        daemon.ready()
+        done = rostool(["--ros2", "daemon", "status", "--json"], daemon.env)
+        assert done.returncode == 0, done.stderr
+        found = json.loads(done.stdout)
+        with open(f"/proc/{found['pid']}/status", encoding="utf-8") as status:
+            (rss,) = [int(line.split()[1]) for line in status if line.startswith("VmRSS:")]
+        memory = found["memory"]
+        assert 0.5 * rss < memory["rss_kib"] < 2 * rss
+        assert 0 < memory["malloc_in_use_kib"] < memory["rss_kib"]

@@ -26,6 +26,7 @@ from typing import IO, Any
 
 from rostool.errors import RostoolError
 from rostool.graph.daemon import wire
+from rostool.graph.daemon.memory import memory
 from rostool.graph.daemon.place import DaemonPlace, build_id, daemon_place
 from rostool.graph.daemon.queries import SERVED
 from rostool.graph.daemon.relay_server import Relay, qos_of
@@ -141,7 +142,7 @@ class Daemon:
             "running": True, "pid": os.getpid(), "socket": str(self.place.socket), "backend": self.backend,
             "domain": int(dict(self.place.fields)["domain"]), "uptime": uptime,
             "build": self.build, "log": str(self.place.log), "graph": size, "key": dict(self.place.fields),
-            "relays": sorted(relay.topic for relay in list(self.relays)),
+            "relays": sorted(relay.topic for relay in list(self.relays)), "memory": memory(),
         }  # fmt: skip
 
     # --- the socket ------------------------------------------------------------------------------
