@@ -9,11 +9,13 @@ import subprocess
 import sys
 import time
 import xmlrpc.client
+from collections.abc import Callable
 from pathlib import Path
 
 from tests.peers import HELLO_PUBLISHER
 from tests.support import (
     TESTDATA,
+    Watched,
     debian,
     debian_popen,
     rostool,
@@ -159,25 +161,61 @@ def no_traceback(result: subprocess.CompletedProcess[str] | tuple[str, str]) -> 
     assert "Traceback" not in text, text
 
 
+class TimedSubscriber:
+    """A rospy subscriber (TIMED_SUBSCRIBER) on one topic that a test's plays share: each play's messages
+    are the lines printed since that play began, and `close` checks nothing came outside a play."""
+
+    def __init__(self, env: dict[str, str], tmp_path: Path, topic: str, type_name: str) -> None:
+        self.env = env
+        self.lines_played = 0
+        proc = start_rospy_script(
+            TIMED_SUBSCRIBER, env, tmp_path, f"sub{time.monotonic_ns()}", [topic, type_name]
+        )
+        self.watched = Watched(proc)
+        wait_subscribed(env, topic)
+
+    def play(
+        self,
+        args: list[str],
+        until: Callable[[list[tuple[float, str]]], bool],
+        wait: tuple[str, ...] = ("--wait-for-subscribers",),
+    ) -> tuple[subprocess.CompletedProcess[str], list[tuple[float, str]]]:
+        """Run `rostool bag play ARGS`; what this subscriber received from it, once `until(received)`
+        holds (or 10 s passed: the caller's assertion then says what is missing)."""
+        before = len(timed_values(self.watched.stdout))
+        played = rostool(["bag", "play", *wait, *args], self.env, timeout=60)
+        assert played.returncode == 0, played.stderr
+        no_traceback(played)
+        self.watched.wait_for(lambda out: until(timed_values(out)[before:]), 10)
+        received = timed_values(self.watched.stdout)[before:]
+        self.lines_played += len(received)
+        return played, received
+
+    def close(self) -> None:
+        """Stops the subscriber: every message it printed came during a play (none after it was read)."""
+        out, _err = self.watched.stop()
+        assert len(timed_values(out)) == self.lines_played, out
+
+
+def count(n: int) -> Callable[[list[tuple[float, str]]], bool]:
+    return lambda received: len(received) >= n
+
+
 def play_into(
     env: dict[str, str],
     tmp_path: Path,
     topic: str,
     type_name: str,
     args: list[str],
+    until: Callable[[list[tuple[float, str]]], bool],
     wait: tuple[str, ...] = ("--wait-for-subscribers",),
 ) -> tuple[subprocess.CompletedProcess[str], list[tuple[float, str]]]:
     """Start a rospy subscriber on `topic`, run `rostool bag play ARGS`, return what it received."""
-    sub = start_rospy_script(TIMED_SUBSCRIBER, env, tmp_path, f"sub{time.monotonic_ns()}", [topic, type_name])
+    sub = TimedSubscriber(env, tmp_path, topic, type_name)
     try:
-        wait_subscribed(env, topic)
-        played = rostool(["bag", "play", *wait, *args], env, timeout=60)
-        time.sleep(0.5)
+        return sub.play(args, until, wait)
     finally:
-        out, _err = stop(sub)
-    assert played.returncode == 0, played.stderr
-    no_traceback(played)
-    return played, timed_values(out)
+        sub.close()
 
 
 # -- tests ---------------------------------------------------------------------------------------
@@ -197,15 +235,15 @@ def test_bag_from_debian_rosbag_record_plays_to_rostopic_echo(
         stop(pub)
     expected = bag_values(bag, "/hello_world")
     assert len(expected) >= 5 and all(v.startswith("Hello_World_") for v in expected)
-    echo = debian_popen(["rostopic", "echo", "/hello_world"], env)
+    echo = Watched(debian_popen(["rostopic", "echo", "/hello_world"], env))
     try:
         wait_subscribed(env, "/hello_world")
         played = rostool(["bag", "play", "--wait-for-subscribers", "-r", "4", str(bag)], env)
         assert played.returncode == 0, played.stderr
         assert played.stderr == ""  # not a terminal: no status line
-        time.sleep(0.5)
+        echo.wait_for(lambda out: len(echo_strings(out)) >= len(expected), 10)
     finally:
-        out, _err = stop(echo)
+        out, _err = echo.stop()
     assert echo_strings(out) == expected
     # the publisher is gone from the master once play has ended
     assert nodes_on(env, "/hello_world", "pub") == []
@@ -214,28 +252,34 @@ def test_bag_from_debian_rosbag_record_plays_to_rostopic_echo(
 def test_rate_loop_window_remap_and_clock(debian_master: dict[str, str], tmp_path: Path) -> None:
     env = debian_master
     bag = write_int_bag(tmp_path / "numbers.bag", count=41, period_ns=50_000_000)  # 2 s at 20 Hz
-    _played, normal = play_into(env, tmp_path, "/numbers", "std_msgs/Int32", [str(bag)])
-    assert [v for _t, v in normal] == [str(i) for i in range(41)]
-    _played, fast = play_into(env, tmp_path, "/numbers", "std_msgs/Int32", ["-r", "2", str(bag)])
-    assert [v for _t, v in fast] == [str(i) for i in range(41)]
-    span_normal, span_fast = normal[-1][0] - normal[0][0], fast[-1][0] - fast[0][0]
-    assert 1.8 < span_normal < 2.6, span_normal
-    assert 0.4 < span_fast / span_normal < 0.6, (span_fast, span_normal)
-    # -s/-u: exactly the messages stamped within [start + 0.5 s, start + 0.5 s + 0.3 s]
-    _played, window = play_into(
-        env, tmp_path, "/numbers", "std_msgs/Int32", ["-s", "0.5", "-u", "0.3", str(bag)]
-    )
-    assert [v for _t, v in window] == [str(i) for i in range(10, 17)]
+    numbers = TimedSubscriber(env, tmp_path, "/numbers", "std_msgs/Int32")  # one for the three plays
+    try:
+        _played, normal = numbers.play([str(bag)], count(41))
+        assert [v for _t, v in normal] == [str(i) for i in range(41)]
+        _played, fast = numbers.play(["-r", "2", str(bag)], count(41))
+        assert [v for _t, v in fast] == [str(i) for i in range(41)]
+        span_normal, span_fast = normal[-1][0] - normal[0][0], fast[-1][0] - fast[0][0]
+        assert 1.8 < span_normal < 2.6, span_normal
+        assert 0.4 < span_fast / span_normal < 0.6, (span_fast, span_normal)
+        # -s/-u: exactly the messages stamped within [start + 0.5 s, start + 0.5 s + 0.3 s]
+        _played, window = numbers.play(["-s", "0.5", "-u", "0.3", str(bag)], count(7))
+        assert [v for _t, v in window] == [str(i) for i in range(10, 17)]
+    finally:
+        numbers.close()
     # remapping, as an option and as a ROS-style argument
-    for remap in (["--remap", "/numbers:=/renamed"], ["/numbers:=/renamed"]):
-        _played, renamed = play_into(
-            env, tmp_path, "/renamed", "std_msgs/Int32", ["-r", "10", str(bag), *remap]
-        )
-        assert [v for _t, v in renamed] == [str(i) for i in range(41)]
+    renamed_sub = TimedSubscriber(env, tmp_path, "/renamed", "std_msgs/Int32")
+    try:
+        for remap in (["--remap", "/numbers:=/renamed"], ["/numbers:=/renamed"]):
+            _played, renamed = renamed_sub.play(["-r", "10", str(bag), *remap], count(41))
+            assert [v for _t, v in renamed] == [str(i) for i in range(41)]
+    finally:
+        renamed_sub.close()
     # --clock: /clock carries bag times, every message's stamp among them, never going back
+    last = f"{(T0 + 40 * 50_000_000) // 10**9}.{(T0 + 40 * 50_000_000) % 10**9:09d}"
     _played, clock = play_into(
-        env, tmp_path, "/clock", "rosgraph_msgs/Clock", ["--clock", str(bag)], wait=("-d", "1.5")
-    )
+        env, tmp_path, "/clock", "rosgraph_msgs/Clock", ["--clock", str(bag)],
+        lambda received: any(v == last for _t, v in received), wait=("-d", "1.5"),
+    )  # fmt: skip
     stamps = [int(v.split(".")[0]) * 1_000_000_000 + int(v.split(".")[1]) for _t, v in clock]
     assert len(stamps) > 41 + 100  # 100 Hz during 2 s, plus one per message
     assert all(T0 - 1000 <= s <= T0 + 2_000_000_000 + 1000 for s in stamps)
@@ -247,19 +291,19 @@ def test_rate_loop_window_remap_and_clock(debian_master: dict[str, str], tmp_pat
 def test_loop_repeats_and_ctrl_c_unregisters(debian_master: dict[str, str], tmp_path: Path) -> None:
     env = debian_master
     bag = write_int_bag(tmp_path / "short.bag", count=5, period_ns=20_000_000)
-    sub = start_rospy_script(TIMED_SUBSCRIBER, env, tmp_path, "sub", ["/numbers", "std_msgs/Int32"])
+    sub = Watched(start_rospy_script(TIMED_SUBSCRIBER, env, tmp_path, "sub", ["/numbers", "std_msgs/Int32"]))
     try:
         wait_subscribed(env, "/numbers")
         player = rostool_popen(["bag", "play", "-l", "--wait-for-subscribers", str(bag)], env)
         wait_published(env, "/numbers")
-        time.sleep(1.5)
+        sub.wait_for(lambda out: len(timed_values(out)) > 10, 20)  # the bag more than twice
         player.send_signal(signal.SIGINT)
         out, err = player.communicate(timeout=10)
         assert player.returncode == 130, err
         assert "Traceback" not in err and out == ""
         assert wait_until(lambda: nodes_on(env, "/numbers", "pub") == [], 5)
     finally:
-        received, _err = stop(sub)
+        received, _err = sub.stop()
     values = [v for _t, v in timed_values(received)]
     assert len(values) > 10  # the bag holds 5
     assert values[:10] == [str(i % 5) for i in range(10)]
@@ -280,15 +324,15 @@ def test_latched_topic_reaches_a_late_subscriber(debian_master: dict[str, str], 
 
 def test_ros2_bag_plays_into_ros1(debian_master: dict[str, str], tmp_path: Path) -> None:
     env = debian_master
-    echo = debian_popen(["rostopic", "echo", "/topic"], env)
+    echo = Watched(debian_popen(["rostopic", "echo", "/topic"], env))
     try:
         # rostopic echo subscribes once the topic has a publisher; play waits for it
         bag = TESTDATA / "ros2" / "talker_mcap"
         played = rostool(["bag", "play", "--wait-for-subscribers", "-r", "5", str(bag)], env)
         assert played.returncode == 0, played.stderr
-        time.sleep(0.5)
+        echo.wait_for(lambda out: len(echo_strings(out)) >= 10, 10)
     finally:
-        out, _err = stop(echo)
+        out, _err = echo.stop()
     assert echo_strings(out) == [f"Hello, world! {i}" for i in range(10)]
     # the Log and ParameterEvent topics have no ROS 1 type: skipped, each with one warning line
     warnings = played.stderr.splitlines()
@@ -397,7 +441,9 @@ def test_pause_topics_pause_before_their_message_until_space(
     rows = [("/numbers", i * 0.05, i) for i in range(20)] + [("/pause_here", 0.525, 100)]
     bag = write_rows_bag(tmp_path / "pause.bag", rows)
     subs = {
-        topic: start_rospy_script(TIMED_SUBSCRIBER, env, tmp_path, f"sub{n}", [topic, "std_msgs/Int32"])
+        topic: Watched(
+            start_rospy_script(TIMED_SUBSCRIBER, env, tmp_path, f"sub{n}", [topic, "std_msgs/Int32"])
+        )
         for n, topic in enumerate(("/numbers", "/pause_here"))
     }
     try:
@@ -415,9 +461,10 @@ def test_pause_topics_pause_before_their_message_until_space(
             assert play.proc.wait(10) == 0
             assert b"Bag Time: 1700000000.5" in play.output  # paused at the time of the last message before
             assert play.mode_restored()
-        time.sleep(0.5)
+        for topic, expected in (("/numbers", 20), ("/pause_here", 1)):
+            subs[topic].wait_for(lambda out, n=expected: len(timed_values(out)) >= n, 10)
     finally:
-        received = {topic: timed_values(stop(sub)[0]) for topic, sub in subs.items()}
+        received = {topic: timed_values(sub.stop()[0]) for topic, sub in subs.items()}
     numbers = received["/numbers"]
     assert [v for _t, v in numbers] == [str(i) for i in range(20)]
     assert all(t < resumed for t, v in numbers if int(v) <= 10)  # stamped before /pause_here's message
@@ -445,18 +492,25 @@ def test_pause_topics_without_a_terminal_is_one_line(debian_master: dict[str, st
 def test_skip_empty_jumps_over_gaps_with_clock(debian_master: dict[str, str], tmp_path: Path) -> None:
     env = debian_master
     bag = gap_bag(tmp_path)
-    _played, got = play_into(env, tmp_path, "/numbers", "std_msgs/Int32", ["--skip-empty", "1", str(bag)])
-    assert [v for _t, v in got] == [str(i) for i in range(10)]
-    assert got[-1][0] - got[0][0] < 3.0, got  # 0.8 s of messages around the skipped 20 s
-    assert got[5][0] - got[4][0] < 0.5, got
-    # a gap shorter than SEC is played as recorded: 20.8 s at -r 20
-    kept_args = ["-r", "20", "--skip-empty", "30", str(bag)]
-    _played, kept = play_into(env, tmp_path, "/numbers", "std_msgs/Int32", kept_args)
-    assert [v for _t, v in kept] == [str(i) for i in range(10)]
-    assert kept[-1][0] - kept[0][0] > 0.8, kept
+    numbers = TimedSubscriber(env, tmp_path, "/numbers", "std_msgs/Int32")  # one for both plays
+    try:
+        _played, got = numbers.play(["--skip-empty", "1", str(bag)], count(10))
+        assert [v for _t, v in got] == [str(i) for i in range(10)]
+        assert got[-1][0] - got[0][0] < 3.0, got  # 0.8 s of messages around the skipped 20 s
+        assert got[5][0] - got[4][0] < 0.5, got
+        # a gap shorter than SEC is played as recorded: 20.8 s at -r 20
+        _played, kept = numbers.play(["-r", "20", "--skip-empty", "30", str(bag)], count(10))
+        assert [v for _t, v in kept] == [str(i) for i in range(10)]
+        assert kept[-1][0] - kept[0][0] > 0.8, kept
+    finally:
+        numbers.close()
     # /clock follows the bag time: it jumps with the schedule, never showing the skipped region
     clock_args = ["--clock", "--skip-empty", "1", str(bag)]
-    _played, clock = play_into(env, tmp_path, "/clock", "rosgraph_msgs/Clock", clock_args, wait=("-d", "1.5"))
+    last = f"{T0 // 10**9 + 20}.800000000"  # the last message's stamp (GAP_OFFSETS)
+    _played, clock = play_into(
+        env, tmp_path, "/clock", "rosgraph_msgs/Clock", clock_args,
+        lambda received: any(v == last for _t, v in received), wait=("-d", "1.5"),
+    )  # fmt: skip
     stamps = [int(v.split(".")[0]) * 1_000_000_000 + int(v.split(".")[1]) for _t, v in clock]
     assert stamps == sorted(stamps)
     assert {T0 + round(t * 1e9) for t in GAP_OFFSETS} <= set(stamps)
@@ -466,19 +520,19 @@ def test_skip_empty_jumps_over_gaps_with_clock(debian_master: dict[str, str], tm
 def test_prefix_then_remap_as_rosbag(debian_master: dict[str, str], tmp_path: Path) -> None:
     env = debian_master
     bag = write_int_bag(tmp_path / "numbers.bag", count=11, period_ns=20_000_000)
-    echo = debian_popen(["rostopic", "echo", "/pre/numbers"], env)
+    echo = Watched(debian_popen(["rostopic", "echo", "/pre/numbers"], env))
     try:
         # a remapping of the bag's own name does not apply: rosbag remaps the prefixed name
         args = ["--wait-for-subscribers", "-p", "/pre", str(bag), "/numbers:=/elsewhere"]
         played = rostool(["bag", "play", *args], env)
         assert played.returncode == 0, played.stderr
-        time.sleep(0.5)
+        echo.wait_for(lambda out: len(echo_strings(out)) >= 11, 10)
     finally:
-        out, _err = stop(echo)
+        out, _err = echo.stop()
     assert echo_strings(out) == [str(i) for i in range(11)]
     # a relative prefix, and a remapping of the prefixed name
     remap = ["-p", "pre", str(bag), "--remap", "/pre/numbers:=/renamed"]
-    _played, renamed = play_into(env, tmp_path, "/renamed", "std_msgs/Int32", remap)
+    _played, renamed = play_into(env, tmp_path, "/renamed", "std_msgs/Int32", remap, count(11))
     assert [v for _t, v in renamed] == [str(i) for i in range(11)]
 
 

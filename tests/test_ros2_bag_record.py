@@ -22,6 +22,7 @@ from tests.support import (
     require_ros1_peers,
     rostool,
     rostool_popen,
+    side_by_side,
     stop,
     wait_until,
 )
@@ -216,10 +217,11 @@ def test_custom_types_from_sources_are_recorded_self_describing(tmp_path: Path) 
     out = tmp_path / "custom.mcap"
     try:
         blind_out = tmp_path / "blind.mcap"
-        blind = rostool(["bag", "record", "/status", "-O", str(blind_out), "--duration", "2"], env)
-        recorded = rostool(
-            ["bag", "record", "/status", "-O", str(out), "--duration", "2", "--interfaces", str(sources)], env
-        )
+        blind, recorded = side_by_side([
+            lambda: rostool(["bag", "record", "/status", "-O", str(blind_out), "--duration", "2"], env),
+            lambda: rostool(["bag", "record", "/status", "-O", str(out), "--duration", "2", "--interfaces",
+                             str(sources)], env),
+        ])  # fmt: skip
     finally:
         stop(publisher)
     # without the sources the type comes from the publisher's type description service
@@ -245,9 +247,11 @@ def test_hidden_topics_only_when_asked(env: dict[str, str], tmp_path: Path) -> N
     try:
         listed = ["topic", "list", "--include-hidden-topics"]  # ros2 topic list hides /_name topics
         assert wait_until(lambda: len(rostool(listed, env).stdout.split()) == 2, timeout=20)
-        plain = rostool(["bag", "record", "-a", "-O", str(tmp_path / "plain.mcap"), "--duration", "1.5"], env)
-        hidden = rostool(["bag", "record", "-a", "--include-hidden-topics", "-O", str(tmp_path / "all.mcap"),
-                          "--duration", "1.5"], env)  # fmt: skip
+        recording = ["bag", "record", "-a", "--duration", "1.5", "-O"]
+        plain, hidden = side_by_side([
+            lambda: rostool([*recording, str(tmp_path / "plain.mcap")], env),
+            lambda: rostool([*recording, str(tmp_path / "all.mcap"), "--include-hidden-topics"], env),
+        ])  # fmt: skip
     finally:
         for proc in procs:
             stop(proc)

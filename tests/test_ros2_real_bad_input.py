@@ -6,9 +6,11 @@ from __future__ import annotations
 import signal
 import time
 from collections.abc import Callable
+from pathlib import Path
 
-from tests.ros2_peers import RclpyPeer
+from tests.ros2_peers import FASTDDS_PROFILE, RclpyPeer
 from tests.support import rostool, rostool_popen
+from tests.test_ros2_fastdds_rpc import in_lanes
 
 Start = Callable[..., RclpyPeer]
 
@@ -27,6 +29,17 @@ def one_line_failure(args: list[str], env: dict[str, str], words: str, timeout: 
     assert len(lines) == 1 and words in lines[0], (args, done.stderr)
 
 
+# The peers' loopback profile with a short participant lease (Fast DDS's default is 20 s): a peer killed
+# with SIGKILL is declared gone after 3 s instead of 20. peer_env (tests/ros2_peers.py) writes its profile
+# into the test's tmp_path only when none is there, so this one, written first, is the one the peers read.
+SHORT_LEASE = FASTDDS_PROFILE.replace(
+    "<builtin>",
+    "<builtin>\n        <discovery_config>\n          <leaseDuration><sec>3</sec></leaseDuration>\n"
+    "          <leaseAnnouncement><sec>1</sec></leaseAnnouncement>\n        </discovery_config>",
+    1,
+)
+
+
 def test_unknown_names_and_a_wrong_service_type(graph_env: dict[str, str], start_peer: Start) -> None:
     start_peer("--name", "server", "--service", "/set_flag", "--action", "/fibonacci", "--params")
     cases = [
@@ -41,13 +54,20 @@ def test_unknown_names_and_a_wrong_service_type(graph_env: dict[str, str], start
         (["param", "get", "/server", "no_such_parameter"], "no_such_parameter"),
         (["param", "set", "/server", "speed", "not a number"], "speed"),
     ]  # fmt: skip
-    for args, words in cases:
-        one_line_failure(args, graph_env, words)
+    # side by side, except the two runs that call /server's parameter services: one lane, one after the
+    # other (rostool's DDS client takes the first reply after its request, see in_lanes)
+    lanes = [("/server" if args[2] == "/server" and args[0] == "param" else None, [str(index)])
+             for index, (args, _words) in enumerate(cases)]  # fmt: skip
+    in_lanes(lambda index: one_line_failure(cases[int(index[0])][0], graph_env, cases[int(index[0])][1]),
+             lanes, workers=3)  # fmt: skip
 
 
-def test_a_server_that_vanishes_mid_goal(graph_env: dict[str, str], start_peer: Start) -> None:
-    """SIGKILL leaves no goodbye: the client notices when the server's participant lease ends (Fast DDS:
-    20 s) and says which call lost its server."""
+def test_a_server_that_vanishes_mid_goal(
+    graph_env: dict[str, str], start_peer: Start, tmp_path: Path
+) -> None:
+    """SIGKILL leaves no goodbye: the client notices when the server's participant lease ends (Fast DDS's
+    default 20 s; 3 s here, SHORT_LEASE) and says which call lost its server."""
+    (tmp_path / "fastdds_loopback.xml").write_text(SHORT_LEASE)
     server = start_peer("--name", "server", "--action", "/fibonacci", "--step", "1.0")
     goal = rostool_popen(["action", "send-goal", "/fibonacci", "test_msgs/action/Fibonacci", "{order: 30}"],
                          graph_env)  # fmt: skip

@@ -14,7 +14,7 @@ from collections.abc import Callable
 import pytest
 
 from tests.ros2_peers import RclpyPeer
-from tests.support import rostool, rostool_popen, stop
+from tests.support import rostool, rostool_popen, side_by_side, stop
 
 Start = Callable[..., RclpyPeer]
 
@@ -25,26 +25,33 @@ def docs(text: str) -> list[str]:
 
 def test_topic_list_finds_a_real_publisher_every_time(graph_env: dict[str, str], start_peer: Start) -> None:
     start_peer("--name", "talker", "--talk", "/chatter")
-    for _ in range(10):
-        listed = rostool(["topic", "list"], graph_env)
+    # ten listings, each a fresh participant discovering the graph, plus the typed forms: side by side
+    asked = [["topic", "list"]] * 10 + [
+        ["topic", "list", "-v"], ["topic", "type", "/chatter"], ["topic", "find", "std_msgs/msg/String"]
+    ]  # fmt: skip
+    *listings, verbose, typed, found = side_by_side([lambda a=args: rostool(a, graph_env) for args in asked])
+    for listed in listings:
         assert "/chatter" in listed.stdout.split(), listed.stderr
-    typed = rostool(["topic", "list", "-v"], graph_env).stdout
-    assert " * /chatter [std_msgs/msg/String] 1 publisher" in typed
-    assert rostool(["topic", "type", "/chatter"], graph_env).stdout == "std_msgs/msg/String\n"
-    assert rostool(["topic", "find", "std_msgs/msg/String"], graph_env).stdout == "/chatter\n"
+    assert " * /chatter [std_msgs/msg/String] 1 publisher" in verbose.stdout
+    assert typed.stdout == "std_msgs/msg/String\n"
+    assert found.stdout == "/chatter\n"
 
 
 def test_node_list_and_info_show_the_real_node(graph_env: dict[str, str], start_peer: Start) -> None:
     start_peer("--name", "talker", "--namespace", "/robot", "--talk", "/chatter", "--listen", "/heard")
-    nodes = rostool(["node", "list"], graph_env)
+    nodes, as_json, as_text = side_by_side([
+        lambda: rostool(["node", "list"], graph_env),
+        lambda: rostool(["node", "info", "/robot/talker", "--json"], graph_env),
+        lambda: rostool(["node", "info", "/robot/talker"], graph_env),
+    ])  # fmt: skip
     assert "/robot/talker" in nodes.stdout.split(), nodes.stderr
-    info = json.loads(rostool(["node", "info", "/robot/talker", "--json"], graph_env).stdout)
+    info = json.loads(as_json.stdout)
     assert {"name": "/chatter", "type": "std_msgs/msg/String"} in info["publishers"]
     assert {"name": "/heard", "type": "std_msgs/msg/String"} in info["subscribers"]
     # rclpy's own services (parameters, type description) belong to the node
     service_names = [s["name"] for s in info["service_servers"]]
     assert "/robot/talker/list_parameters" in service_names
-    text = rostool(["node", "info", "/robot/talker"], graph_env).stdout.splitlines()
+    text = as_text.stdout.splitlines()
     assert text[0] == "/robot/talker"
     assert "    /chatter: std_msgs/msg/String" in text
 
@@ -63,13 +70,15 @@ def test_topic_info_verbose_names_the_real_node(graph_env: dict[str, str], start
 
 def test_echo_receives_the_real_publishers_messages(graph_env: dict[str, str], start_peer: Start) -> None:
     start_peer("--name", "talker", "--talk", "/chatter", "--rate", "20")
-    echo = rostool(["topic", "echo", "/chatter", "-n", "3", "--json"], graph_env)
+    echo, once = side_by_side([
+        lambda: rostool(["topic", "echo", "/chatter", "-n", "3", "--json"], graph_env),
+        lambda: rostool(["topic", "echo", "/chatter", "-n", "1"], graph_env),
+    ])  # fmt: skip
     assert echo.returncode == 0, echo.stderr
     values = [json.loads(line)["data"] for line in echo.stdout.splitlines()]
     numbers = [int(v.removeprefix("hello ")) for v in values]
     assert numbers == list(range(numbers[0], numbers[0] + 3))
-    text = rostool(["topic", "echo", "/chatter", "-n", "1"], graph_env).stdout
-    assert docs(text)[0].startswith("data: hello ")
+    assert docs(once.stdout)[0].startswith("data: hello ")
 
 
 @pytest.mark.alone
@@ -150,12 +159,13 @@ def test_a_real_node_sees_rostool_as_a_node(
 
 def test_bad_input_on_a_real_graph(graph_env: dict[str, str], start_peer: Start) -> None:
     start_peer("--name", "talker", "--talk", "/chatter")
-    for args, words in (
+    cases = (
         (["node", "info", "/nobody"], "/nobody"),
         (["topic", "echo", "/nothing", "--timeout", "1"], "no message"),
         (["topic", "pub", "/chatter", "std_msgs/msg/Nope", "data: 1", "-1"], "std_msgs/msg/Nope"),
-    ):
-        done = rostool(args, graph_env, timeout=20)
+    )
+    runs = side_by_side([lambda a=args: rostool(a, graph_env, timeout=20) for args, _words in cases])
+    for (args, words), done in zip(cases, runs, strict=True):
         assert done.returncode != 0, args
         # one error line (echo first warns that nothing publishes the topic, as ros2 topic echo does)
         lines = [line for line in done.stderr.strip().splitlines() if not line.startswith("WARNING: ")]

@@ -449,11 +449,14 @@ def test_recording_killed_is_recovered_by_reindex(
     start_peer: Peer, graph_env: dict[str, str], tmp_path: Path
 ) -> None:
     """kill -9 while recording a rosbag2 directory: `bag reindex DIR` gives a bag rosbags reads."""
-    start_peer("--talk", "/chatter", "--rate", "50")
+    talker = start_peer("--talk", "/chatter", "--rate", "50")
+    started = time.monotonic()
     proc = rostool_popen(
         ["--ros2", "bag", "record", "--topics", "/chatter", "-o", "killed"], graph_env, cwd=tmp_path
     )
-    time.sleep(4.0)
+    # killed once the talker has seen the recorder subscribe and published 50 more (1 s at 50 Hz)
+    matched = talker.wait_for("matched", lambda e: e["subscribers"] > 0 and e["t"] > started, 60)
+    talker.wait_for(matched["progress"], lambda e: e["count"] >= matched["count"] + 50, 60)
     proc.kill()
     proc.communicate(timeout=10)
     bag = tmp_path / "killed"
