@@ -118,6 +118,7 @@ def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--minutes", type=float, default=6.0)
     parser.add_argument("--variants", default=",".join(VARIANTS))
+    parser.add_argument("--under", default="", help="a command to run each watcher under (e.g. heaptrack)")
     args = parser.parse_args()
     variants = [v for v in args.variants.split(",") if v]
     scratch = Path(tempfile.mkdtemp(prefix="rtp"))
@@ -129,11 +130,15 @@ def main() -> None:
     steady = churner = None
     try:
         for variant in variants:
-            watchers[variant] = subprocess.Popen([VENV_PYTHON, "-c", WATCHER, variant], env=env,
-                                                 stdout=subprocess.PIPE, text=True)  # fmt: skip
+            script = scratch / "watcher.py"  # a file, not -c: wrappers such as heaptrack re-quote arguments
+            script.write_text(WATCHER)
+            watchers[variant] = subprocess.Popen([*args.under.split(), VENV_PYTHON, str(script), variant],
+                                                 env=env, stdout=subprocess.PIPE, text=True)  # fmt: skip
         for variant, proc in watchers.items():
             assert proc.stdout is not None
-            if proc.stdout.readline().strip() != "ready":
+            while (line := proc.stdout.readline()) and line.strip() != "ready":
+                pass  # a wrapper's own lines
+            if not line:
                 sys.exit(f"{variant} did not start")
         steady = RclpyPeer(DISTRO, env, scratch, ["--name", "steady", "--talk", "/steady"])
         steady.wait_for("ready", timeout=60)

@@ -7,6 +7,10 @@ until no answer names it), on each backend, beside the real `ros2` with its own 
 Each tool is polled with a new process per call, as a user's shell would (so each figure includes one
 call's own time, about 0.1-0.3 s). A joiner carries a topic and a service of its own, so that a listing
 which knew its node but not yet its endpoints would also be caught. Medians and maxima of RUNS.
+
+`--brief N`: then N brief nodes per tool, each living BRIEF_LIFE s from its context's start (shorter than
+the 3 s heartbeat of a Fast DDS ros_discovery_info writer, whose first sample a long-lived Cyclone reader
+used to miss): how many `node list` named while they were alive.
 """
 
 from __future__ import annotations
@@ -28,6 +32,22 @@ from tests.ros2_peers import PEERS_DIR, RclpyPeer, peer_env
 DISTRO = "jazzy"
 ROS2 = str(PEERS_DIR / DISTRO / "bin" / "ros2")
 LIMIT = 30.0
+BRIEF_LIFE = 2.5
+BRIEF_NODE = r"""
+import sys, time
+import rclpy
+from std_msgs.msg import String
+name, life = sys.argv[1], float(sys.argv[2])
+context = rclpy.Context()
+rclpy.init(context=context)
+born = time.monotonic()
+node = rclpy.create_node(name, context=context)
+node.create_publisher(String, "/" + name, 10)
+print("up", flush=True)
+time.sleep(max(0.0, life - (time.monotonic() - born)))
+node.destroy_node()
+rclpy.shutdown(context=context)
+"""
 
 
 def names(command: list[str], env: dict[str, str], verb: str) -> set[str]:
@@ -59,10 +79,25 @@ def join_and_leave(
     return joined, until(lambda: node not in names(command, tool_env, "node"))
 
 
+def brief_named(command: list[str], tool_env: dict[str, str], fast: dict[str, str], name: str) -> bool:
+    """Whether `node list` named a node living BRIEF_LIFE s while it was alive."""
+    brief = subprocess.Popen([str(PEERS_DIR / DISTRO / "bin" / "python"), "-c", BRIEF_NODE, name,
+                              str(BRIEF_LIFE)], env=fast, stdout=subprocess.PIPE, text=True)  # fmt: skip
+    try:
+        assert brief.stdout is not None and brief.stdout.readline().strip() == "up"
+        while brief.poll() is None:
+            if f"/{name}" in names(command, tool_env, "node"):
+                return True
+        return False
+    finally:
+        brief.communicate(timeout=30)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--runs", type=int, default=5)
     parser.add_argument("--backend", action="append", choices=("dds", "rclpy"))
+    parser.add_argument("--brief", type=int, default=0, help="brief nodes per tool (see above)")
     args = parser.parse_args()
     scratch = Path(tempfile.mkdtemp(prefix="rtl"))
     run_dir = scratch / "run"
@@ -95,6 +130,12 @@ def main() -> None:
         for label in tools:
             print(f"| {label} | {statistics.median(joins[label]):.2f} s, {max(joins[label]):.2f} s | "
                   f"{statistics.median(leaves[label]):.2f} s, {max(leaves[label]):.2f} s |")  # fmt: skip
+        if args.brief:
+            print(f"\n| tool | brief nodes ({BRIEF_LIFE:g} s) named while alive |\n|---|---|")
+            for label, (command, tool_env) in tools.items():
+                named = sum(brief_named(command, tool_env, fast, f"brief_{label.split()[-1]}_{k}")
+                            for k in range(args.brief))  # fmt: skip
+                print(f"| {label} | {named} / {args.brief} |", flush=True)
     finally:
         steady.stop()
         for command, tool_env in tools.values():
