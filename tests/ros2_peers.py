@@ -73,11 +73,29 @@ def peer_python(distro: str) -> Path:
     return python
 
 
-def peer_env(env: dict[str, str], tmp_path: Path) -> dict[str, str]:
-    """The peer's side of a test's ROS 2 environment: the same ROS_DOMAIN_ID, Fast DDS on loopback only."""
-    profile = tmp_path / "fastdds_loopback.xml"
+def fastdds_profile(lease: float | None = None) -> str:
+    """The peers' loopback-only profile; `lease`: the participant's lease in seconds (Fast DDS's default
+    is 20 s, announced every 3 s), announced 4 times per lease."""
+    if lease is None:
+        return FASTDDS_PROFILE
+    every_ns = int(lease / 4 * 1e9)
+    config = (
+        f"<discovery_config><leaseDuration><sec>{int(lease)}</sec></leaseDuration><leaseAnnouncement>"
+        f"<sec>{every_ns // 10**9}</sec><nanosec>{every_ns % 10**9}</nanosec></leaseAnnouncement>"
+        "</discovery_config>"
+    )
+    return FASTDDS_PROFILE.replace("<builtin>", f"<builtin>\n        {config}", 1)
+
+
+def peer_env(env: dict[str, str], tmp_path: Path, lease: float | None = None) -> dict[str, str]:
+    """The peer's side of a test's ROS 2 environment: the same ROS_DOMAIN_ID, Fast DDS on loopback only
+    (a participant lease of `lease` seconds, when given)."""
+    profile = tmp_path / ("fastdds_loopback.xml" if lease is None else f"fastdds_loopback_lease{lease:g}.xml")
     if not profile.exists():
-        profile.write_text(FASTDDS_PROFILE)
+        # written whole, then renamed: peers started side by side never read half a profile
+        partial = profile.with_suffix(f".{os.getpid()}.{threading.get_ident()}.tmp")
+        partial.write_text(fastdds_profile(lease))
+        partial.replace(profile)
     hidden = ("ROS_AUTOMATIC_DISCOVERY_RANGE", "ROS_LOCALHOST_ONLY", "ROS_STATIC_PEERS", "CYCLONEDDS_URI",
               "PYTHONPATH", "PYTHONHOME", "VIRTUAL_ENV")  # fmt: skip
     clean = {k: v for k, v in env.items() if k not in hidden}
@@ -97,13 +115,15 @@ def peer_env(env: dict[str, str], tmp_path: Path) -> dict[str, str]:
 class RclpyPeer:
     """One running rclpy node (tests/rclpy_peer.py) and the JSON events it reported."""
 
-    def __init__(self, distro: str, env: dict[str, str], tmp_path: Path, args: list[str]) -> None:
+    def __init__(
+        self, distro: str, env: dict[str, str], tmp_path: Path, args: list[str], lease: float | None = None
+    ) -> None:
         self.distro = distro
         self.events: list[dict[str, Any]] = []
         self._changed = threading.Condition()
         self.proc = subprocess.Popen(
             [str(peer_python(distro)), str(PEER_SCRIPT), *args],
-            env=peer_env(env, tmp_path),
+            env=peer_env(env, tmp_path, lease),
             stdout=subprocess.PIPE,
             stderr=subprocess.PIPE,
             text=True,
@@ -235,11 +255,18 @@ class WarmDaemon:
         assert "The daemon has been started" in out or "already running" in out, f"daemon start: {out}{err}"
 
     def graph_size(self) -> dict[str, int]:
-        """What the daemon holds now (`daemon status --json`'s graph: nodes, topics, services, actions)."""
-        status = self._popen(["daemon", "status", "--json"], self.env)
-        out, err = status.communicate(timeout=30)
-        assert status.returncode == 0, err
-        return dict(json.loads(out)["graph"])
+        """What the daemon holds now (its status's graph: nodes, topics, services, actions), asked on its
+        socket from this process: a `daemon status --json` run per poll cost a Python start-up each."""
+        from rostool.graph.daemon.client import DaemonClient
+        from rostool.graph.daemon.place import DaemonPlace
+
+        sockets = list(self.run_dir.glob("rostool/*.sock"))
+        assert len(sockets) == 1, f"one daemon socket expected in {self.run_dir}: {sockets}"
+        (path,) = sockets
+        place = DaemonPlace(path.stem, path, path.with_suffix(".lock"), path.with_suffix(".log"), ())
+        found = DaemonClient("auto", self.env, place).status()
+        assert found is not None, f"no daemon answers on {path}"
+        return dict(found["graph"])
 
     def held_locks(self) -> list[int]:
         """The pids of daemons still holding a lock in the runtime directory."""
@@ -274,23 +301,43 @@ def warm_daemon(graph_env: dict[str, str]) -> Iterator[WarmDaemon]:
         yield daemon
 
 
-@pytest.fixture
-def start_peer(distro: str, graph_env: dict[str, str], tmp_path: Path) -> Iterator[Callable[..., RclpyPeer]]:
+class StartPeer:
     """start_peer("--talk", "/chatter", ...) runs a real rclpy node of the test's distro in the test's
-    domain and waits until it is ready; every peer is stopped at the end and must have bound loopback only."""
-    peers: list[RclpyPeer] = []
+    domain and returns it ready; `start_peer.together([...], [...])` starts several side by side (a peer's
+    start-up is mostly waiting: 0.8 s idle, 3-4 s under load) and returns them all ready. `lease=S`: the
+    peers' participant lease (Fast DDS's default: 20 s), for tests that wait for one to expire."""
 
-    def start(*args: str) -> RclpyPeer:
-        peer = RclpyPeer(distro, graph_env, tmp_path, list(args))
-        peers.append(peer)
-        peer.wait_for("ready", timeout=30)
+    def __init__(self, distro: str, env: dict[str, str], tmp_path: Path) -> None:
+        self.distro, self.env, self.tmp_path = distro, env, tmp_path
+        self.peers: list[RclpyPeer] = []
+
+    def __call__(self, *args: str, lease: float | None = None) -> RclpyPeer:
+        (peer,) = self.together(list(args), lease=lease)
         return peer
 
-    yield start
-    for peer in peers:
-        addresses = peer.bound_addresses()
-        peer.stop()
+    def together(self, *arg_lists: list[str], lease: float | None = None) -> list[RclpyPeer]:
+        started = [RclpyPeer(self.distro, self.env, self.tmp_path, args, lease) for args in arg_lists]
+        self.peers += started
+        for peer in started:
+            peer.wait_for("ready", timeout=30)
+        return started
+
+    def stop_all(self) -> None:
+        """Stop every peer; each must have bound loopback addresses only."""
+        addresses = []
+        for peer in self.peers:
+            addresses += peer.bound_addresses()
+            peer.stop()
         assert_loopback_only(addresses)
+
+
+@pytest.fixture
+def start_peer(distro: str, graph_env: dict[str, str], tmp_path: Path) -> Iterator[StartPeer]:
+    """Real rclpy nodes of the test's distro in the test's domain (StartPeer); every peer is stopped at the
+    end and must have bound loopback only."""
+    start = StartPeer(distro, graph_env, tmp_path)
+    yield start
+    start.stop_all()
 
 
 def rclpy_command(args: list[str], distro: str) -> list[str]:

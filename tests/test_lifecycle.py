@@ -7,6 +7,7 @@ from __future__ import annotations
 import os
 import subprocess
 import time
+import xmlrpc.client
 from collections.abc import Callable, Iterator
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
@@ -15,7 +16,7 @@ import pytest
 
 from tests import ros2_peers
 from tests.ros2_backends import ServedTool, Tool, rostool_lines
-from tests.ros2_peers import PEERS_DIR, RclpyPeer, assert_loopback_only, bound_addresses, peer_env
+from tests.ros2_peers import PEERS_DIR, StartPeer, assert_loopback_only, bound_addresses, peer_env
 from tests.support import IN_CI, wait_until
 
 HERE = Path(__file__).resolve().parent
@@ -23,19 +24,12 @@ ROS2CLI_VENV = PEERS_DIR / "jazzy"
 NODE, HIDDEN = "/test_lifecycle_node", "/_hidden_test_lifecycle_node"
 
 
-StartScript = Callable[..., RclpyPeer]
-
-
 @pytest.fixture
-def start_script(monkeypatch: pytest.MonkeyPatch, start_peer: Callable[..., RclpyPeer]) -> StartScript:
-    """start_script("lifecycle_peer.py", *args): start_peer's real rclpy node (same venv, loopback-only
-    environment, JSON events, teardown checks), running another peer script of tests/."""
-
-    def start(script: str, *args: str) -> RclpyPeer:
-        monkeypatch.setattr(ros2_peers, "PEER_SCRIPT", HERE / script)
-        return start_peer(*args)
-
-    return start
+def start_script(monkeypatch: pytest.MonkeyPatch, start_peer: StartPeer) -> StartPeer:
+    """start_peer's real rclpy nodes (same venv, loopback-only environment, JSON events, teardown checks),
+    running tests/lifecycle_peer.py."""
+    monkeypatch.setattr(ros2_peers, "PEER_SCRIPT", HERE / "lifecycle_peer.py")
+    return start_peer
 
 
 Ros2 = Callable[[list[str]], "subprocess.CompletedProcess[str]"]
@@ -79,10 +73,23 @@ def _is_daemon_of(pid: str, domain: str) -> bool:
     return b"ros2-daemon" in words and flag in words[:-1] and words[words.index(flag) + 1] == domain.encode()
 
 
-def ros2_sees(ros2: Ros2, nodes: list[str]) -> None:
-    """Wait until the referee's daemon has discovered every node of `nodes` (lifecycle services too)."""
+def ros2_sees(env: dict[str, str], nodes: list[str]) -> None:
+    """Wait until the referee's daemon has discovered every node of `nodes` (lifecycle services too): the
+    nodes `ros2 lifecycle nodes -a` would list (ros2lifecycle's rule: a node serving `<node>/get_state` of
+    lifecycle_msgs/srv/GetState), asked on the daemon's XML-RPC (127.0.0.1, port 11511 + domain) from this
+    process, as each `ros2` run asks it (a `ros2` run per poll cost 0.5 s of CPU)."""
+    daemon = xmlrpc.client.ServerProxy(f"http://127.0.0.1:{11511 + int(env['ROS_DOMAIN_ID'])}/ros2cli/")
+
+    def lifecycle_nodes() -> list[str]:
+        served = {name for name, types in daemon.get_service_names_and_types()
+                  if "lifecycle_msgs/srv/GetState" in types}  # fmt: skip
+        full = (
+            namespace.rstrip("/") + "/" + name for name, namespace in daemon.get_node_names_and_namespaces()
+        )
+        return sorted(node for node in full if f"{node}/get_state" in served)
+
     deadline = time.monotonic() + 20
-    while (listed := ros2(["lifecycle", "nodes", "-a"]).stdout.split()) != sorted(nodes):
+    while (listed := lifecycle_nodes()) != sorted(nodes):
         assert time.monotonic() < deadline, f"the real ros2 sees {listed}, not {nodes}"
         time.sleep(0.2)
 
@@ -119,7 +126,7 @@ SET_FORMS = [
 
 @pytest.mark.parametrize("distro", ["jazzy"])
 def test_lifecycle_forms_print_what_ros2_prints(
-    served_tool: ServedTool, ros2: Ros2, start_script: StartScript, backend: str
+    served_tool: ServedTool, ros2: Ros2, start_script: StartPeer, backend: str, graph_env: dict[str, str]
 ) -> None:
     """ros2lifecycle's own test cases (its test/test_cli.py), run by both tools on the same nodes, each
     through its daemon (rostool's direct forms: test_set_moves_the_node_through_its_states). The reads run
@@ -127,9 +134,8 @@ def test_lifecycle_forms_print_what_ros2_prints(
     service's requests are empty, so while no node moves all its replies are the same, and one that
     rostool's DDS client of the Fast DDS node takes from another caller prints alike: services.py)."""
     tool = served_tool
-    with ThreadPoolExecutor() as pool:  # the two nodes start side by side
-        list(pool.map(lambda args: start_script("lifecycle_peer.py", *args), [[], ["--name", HIDDEN[1:]]]))
-    ros2_sees(ros2, [NODE, HIDDEN])
+    start_script.together([], ["--name", HIDDEN[1:]])  # the two nodes start side by side
+    ros2_sees(graph_env, [NODE, HIDDEN])
     tool.daemon.ready()
     # the two lifecycle nodes and the real ros2's own daemon node
     assert wait_until(lambda: tool.daemon.graph_size()["nodes"] == 3, timeout=20)
@@ -149,11 +155,13 @@ def test_lifecycle_forms_print_what_ros2_prints(
     )
 
 
-def test_set_moves_the_node_through_its_states(tool: Tool, ros2: Ros2, start_script: StartScript) -> None:
+def test_set_moves_the_node_through_its_states(
+    tool: Tool, ros2: Ros2, start_script: StartPeer, graph_env: dict[str, str]
+) -> None:
     """set moves the real node; nodes, list, get and set asked directly (no daemon) on both backends. The
     sets one after the other; the reads between two sets side by side."""
-    peer = start_script("lifecycle_peer.py")
-    ros2_sees(ros2, [NODE])
+    peer = start_script()
+    ros2_sees(graph_env, [NODE])
     with ThreadPoolExecutor() as pool:
         for done in [pool.submit(same_as_ros2, tool, ros2, ["lifecycle", *args], 3)
                      for args in (["nodes"], ["list", NODE])]:  # fmt: skip

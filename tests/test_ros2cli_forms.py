@@ -13,11 +13,12 @@ from __future__ import annotations
 import re
 import time
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
 import pytest
 
-from tests.ros2_peers import RclpyPeer, WarmDaemon
+from tests.ros2_peers import RclpyPeer, StartPeer, WarmDaemon
 from tests.support import Watched, rostool, rostool_popen, stop, wait_until
 
 Start = Callable[..., RclpyPeer]
@@ -65,15 +66,16 @@ def period() -> float:
 
 
 @pytest.fixture
-def fixture_graph(warm_daemon: WarmDaemon, start_peer: Start, period: float) -> dict[str, RclpyPeer]:
+def fixture_graph(warm_daemon: WarmDaemon, start_peer: StartPeer, period: float) -> dict[str, RclpyPeer]:
     every = ["--period", str(period)]
     repeats = [a for r in REPEATS for a in ("--repeat", r)]
-    peers = {
-        "talker": start_peer("--name", "talker", "--hello", "/chatter", *every),
-        "listener": start_peer("--name", "listener", "--listen", "/chit_chatter"),
-        "hidden": start_peer("--name", "_hidden_talker", "--hello", "/_hidden_chatter", *every),
-        "repeater": start_peer("--name", "repeater", *repeats, "--cmd-vel", "/cmd_vel", *every),
+    roles = {
+        "talker": ["--name", "talker", "--hello", "/chatter", *every],
+        "listener": ["--name", "listener", "--listen", "/chit_chatter"],
+        "hidden": ["--name", "_hidden_talker", "--hello", "/_hidden_chatter", *every],
+        "repeater": ["--name", "repeater", *repeats, "--cmd-vel", "/cmd_vel", *every],
     }
+    peers = dict(zip(roles, start_peer.together(*roles.values()), strict=True))
     warm_daemon.ready()
     # the daemon knows every peer's node (the listing cases check names, and nodes come after endpoints)
     assert wait_until(lambda: warm_daemon.graph_size()["nodes"] == len(peers), timeout=20)
@@ -86,56 +88,140 @@ def served_env(warm_daemon: WarmDaemon) -> dict[str, str]:
     return warm_daemon.env
 
 
+def side_by_side(env: dict[str, str], *calls: tuple[str, ...], workers: int = 4) -> Callable[..., Any]:
+    """Runs `ros2(env, *call)` of every call, `workers` at a time, and returns the lookup of their results
+    by call. Only for runs that change nothing and cannot show up in each other's output: listings and
+    reads answered by the test's warm daemon (a served rostool of the DDS backend opens no participant)."""
+    with ThreadPoolExecutor(max_workers=workers) as pool:
+        running = {call: pool.submit(ros2, env, *call) for call in calls}
+    done = {call: future.result() for call, future in running.items()}
+    return lambda *call: done[call]
+
+
 def test_topic_list_info_type_find(served_env: dict[str, str], fixture_graph: dict[str, RclpyPeer]) -> None:
-    env, c = served_env, Cases()
-    out = ros2(env, "topic", "list").stdout
+    c = Cases()
+    alls = (
+        (["--include-hidden-topics"], "test_list_all_topics"),
+        (["-a"], "test_list_a_alias"),
+        (["--all"], "test_list_all_alias"),
+    )
+    finds = (("-a", "test_find_a_alias"), ("--all", "test_find_all_alias"))
+    ran = side_by_side(
+        served_env, ("topic", "list"), *(("topic", "list", *flags) for flags, _case in alls),
+        ("topic", "list", "-t"), ("topic", "list", "-v"), ("topic", "list", "-c"), ("topic", "info", "/chatter"),
+        ("topic", "info", "-v", "/chatter"), ("topic", "info", "/unknown_topic"), ("topic", "type", "/chatter"),
+        ("topic", "type", "/_hidden_chatter"), ("topic", "find", "rcl_interfaces/msg/Log"),
+        ("topic", "find", "rcl_interfaces/msg/NotAMessageTypeName"),
+        *(("topic", "find", "std_msgs/msg/String", flag) for flag, _case in finds),
+    )  # fmt: skip
+    out = ran("topic", "list").stdout
     c.check("test_list_topics", out.splitlines() == TOPICS, out)
-    for flags, case in ((["--include-hidden-topics"], "test_list_all_topics"), (["-a"], "test_list_a_alias"),
-                        (["--all"], "test_list_all_alias")):  # fmt: skip
-        out = ros2(env, "topic", "list", *flags).stdout
+    for flags, case in alls:
+        out = ran("topic", "list", *flags).stdout
         c.check(case, out.splitlines() == sorted([*TOPICS, "/_hidden_chatter"]), out)
-    out = ros2(env, "topic", "list", "-t").stdout.splitlines()
+    out = ran("topic", "list", "-t").stdout.splitlines()
     expected = ["/arrays [test_msgs/msg/Arrays]", "/chatter [std_msgs/msg/String]",
                 "/cmd_vel [geometry_msgs/msg/TwistStamped]", "/rosout [rcl_interfaces/msg/Log]"]  # fmt: skip
     c.check("test_list_with_types", all(e in out for e in expected) and len(out) == len(TOPICS), out)
-    out = ros2(env, "topic", "list", "-v").stdout.splitlines()
+    out = ran("topic", "list", "-v").stdout.splitlines()
     c.check("test_list_with_verbose", out[0] == "Published topics:" and
             " * /arrays [test_msgs/msg/Arrays] 1 publisher" in out and "Subscribed topics:" in out and
             " * /chit_chatter [std_msgs/msg/String] 1 subscriber" in out and out[-1] == "", out)  # fmt: skip
-    out = ros2(env, "topic", "list", "-c").stdout
+    out = ran("topic", "list", "-c").stdout
     c.check("test_list_count", out == f"{len(TOPICS)}\n", out)
-    out = ros2(env, "topic", "info", "/chatter").stdout
+    out = ran("topic", "info", "/chatter").stdout
     c.check("test_topic_endpoint_info", out == "Type: std_msgs/msg/String\nPublisher count: 1\n"
             "Subscription count: 0\n", out)  # fmt: skip
-    lines = ros2(env, "topic", "info", "-v", "/chatter").stdout.splitlines()
+    lines = ran("topic", "info", "-v", "/chatter").stdout.splitlines()
     c.check("test_topic_endpoint_info_verbose", lines[:4] == ["Type: std_msgs/msg/String", "", "Publisher count: 1", ""]
             and re.fullmatch(r"Node name: \w+", lines[4]) is not None and "Node namespace: /" in lines
             and "Topic type hash: RIHS01_df668c740482bbd48fb39d76a70dfd4bd59db1288021743503259e948f6b1a18" in lines
             and "  Lifespan: Infinite" in lines and "  Liveliness lease duration: Infinite" in lines
             and lines[-2:] == ["Subscription count: 0", ""], lines)  # fmt: skip
-    unknown = ros2(env, "topic", "info", "/unknown_topic")
+    unknown = ran("topic", "info", "/unknown_topic")
     c.check("test_info_on_unknown_topic", "Unknown topic '/unknown_topic'" in unknown.stderr
             and unknown.returncode != 0, unknown)  # fmt: skip
-    out = ros2(env, "topic", "type", "/chatter").stdout
+    out = ran("topic", "type", "/chatter").stdout
     c.check("test_topic_type", out == "std_msgs/msg/String\n", out)
-    hidden = ros2(env, "topic", "type", "/_hidden_chatter")
+    hidden = ran("topic", "type", "/_hidden_chatter")
     c.check("test_hidden_topic_type", hidden.returncode == 1 and hidden.stdout == "", hidden)
-    out = ros2(env, "topic", "find", "rcl_interfaces/msg/Log").stdout
+    out = ran("topic", "find", "rcl_interfaces/msg/Log").stdout
     c.check("test_find_topic_type", out == "/rosout\n", out)
-    none = ros2(env, "topic", "find", "rcl_interfaces/msg/NotAMessageTypeName")
+    none = ran("topic", "find", "rcl_interfaces/msg/NotAMessageTypeName")
     c.check("test_find_not_a_topic_typename", none.returncode == 0 and none.stdout == "", none)
-    for flag, case in (("-a", "test_find_a_alias"), ("--all", "test_find_all_alias")):
-        out = ros2(env, "topic", "find", "std_msgs/msg/String", flag).stdout.split()
+    for flag, case in finds:
+        out = ran("topic", "find", "std_msgs/msg/String", flag).stdout.split()
         c.check(case, "/_hidden_chatter" in out and "/chatter" in out, out)
     c.done()
 
 
+FIELD_CASES = (
+    ("test_topic_echo_field", ["/arrays", "--field", "alignment_check"], ["0", "---"]),
+    ("test_topic_echo_multi_fields", ["/defaults", "--field", "int8_value", "--field", "uint8_value"],
+     ["-50", "200", "---"]),
+    ("test_topic_echo_field_nested", ["/cmd_vel", "--field", "twist.angular"], ["x: 0.0", "y: 0.0", "z: 0.0", "---"]),
+    ("test_topic_echo_field_array", ["/arrays", "--field", "float32_values_default.[2]"], ["-1.125", "---"]),
+    ("test_topic_echo_multi_fields_nested", ["/cmd_vel", "--field", "twist.linear.x", "--field", "twist.linear.y"],
+     ["1.0", "0.0", "---"]),
+    ("test_topic_echo_multi_fields_array", ["/arrays", "--field", "float32_values_default.[2]", "--field",
+     "string_values_default.[1]"], ["-1.125", "max value", "---"]),
+)  # fmt: skip
+BAD_FIELD_CASES = (
+    ("test_topic_echo_field_not_a_member", ["--field", "not_member"],
+     "Invalid field 'not_member': 'Arrays' object has no attribute 'not_member'"),
+    ("test_topic_echo_multi_fields_not_a_member", ["--field", "alignment_check", "--field", "not_member"],
+     "Invalid field 'not_member': 'Arrays' object has no attribute 'not_member'"),
+    ("test_topic_echo_field_invalid", ["--field", "."], "Invalid field value '.'"),
+    ("test_topic_echo_multi_fields_invalid", ["--field", "alignment_check", "--field", "."],
+     "Invalid field value '.'"),
+)  # fmt: skip
+BASIC_CASES = (("test_echo_basic", []), ("test_echo_basic[compatible_qos]",
+               ["--qos-reliability", "best_effort", "--qos-durability", "volatile"]),
+               ("test_echo_basic[message_lost]", ["--lost-messages"]))  # fmt: skip
+# ros2cli's options of the topic verbs that rostool takes and ignores (no rate measured: not `alone`)
+IGNORED_TOPIC_OPTIONS = (["hz", "/chatter", "--spin-time", "1", "-s", "--no-daemon", "--duration", "1.5"],
+                         ["bw", "/chatter", "--spin-time", "1", "-s", "--duration", "1.5"],
+                         ["list", "--no-daemon", "--spin-time", "1", "-s"])  # fmt: skip
+
+
+def echo_once(*args: str) -> tuple[str, ...]:
+    return ("topic", "echo", "--once", *args)
+
+
+def waiting_echo(extra: list[str]) -> tuple[str, ...]:
+    """An echo of a topic nothing publishes, with its TYPE: it waits (here 0.1 s) instead of failing."""
+    return (
+        "topic",
+        "echo",
+        *extra,
+        "--once",
+        "/chit_chatter_echo_source",
+        "std_msgs/String",
+        "--timeout",
+        "0.1",
+    )
+
+
 @pytest.mark.parametrize("period", [0.2])  # an echo --once waits for the next message: no need to wait 1 s
 def test_topic_echo_forms(served_env: dict[str, str], fixture_graph: dict[str, RclpyPeer]) -> None:
-    env, c = served_env, Cases()
+    """Every case only reads: all side by side."""
+    c = Cases()
+    ran = side_by_side(
+        served_env,
+        *(echo_once(*args) for args in (["/chatter"], ["--no-str", "/chatter"], ["--csv", "/defaults"],
+          ["--no-arr", "/arrays"], ["--no-arr", "/unbounded_sequences"], ["--no-arr", "/bounded_sequences"],
+          ["--truncate-length", "5", "/chatter"])),
+        *(echo_once(*args) for _case, args, _expected in FIELD_CASES),
+        *(echo_once("/arrays", *args) for _case, args, _expected in BAD_FIELD_CASES),
+        ("topic", "echo", "/this_topic_has_no_pub", "--timeout", "1"),
+        ("topic", "echo", "--raw", "--once", "/chatter", "std_msgs/msg/String"),
+        *(waiting_echo(extra) for _case, extra in BASIC_CASES),
+        *(("topic", "echo", *extra, "--once", "/chatter", "std_msgs/String") for _case, extra in BASIC_CASES),
+        *(("topic", *args) for args in IGNORED_TOPIC_OPTIONS),
+    )  # fmt: skip
 
     def echo(*args: str) -> Any:
-        return ros2(env, "topic", "echo", "--once", *args, timeout=20)
+        return ran(*echo_once(*args))
 
     out = echo("/chatter").stdout.splitlines()
     c.check("test_topic_echo", len(out) == 2 and re.fullmatch(r"data: 'Hello World: \d+'", out[0]) is not None
@@ -165,60 +251,27 @@ def test_topic_echo_forms(served_env: dict[str, str], fixture_graph: dict[str, R
             and "constants_values: '<sequence type: test_msgs/msg/Constants[3], length: 0>'" in out, out)  # fmt: skip
     out = echo("--truncate-length", "5", "/chatter").stdout.splitlines()
     c.check("test_truncate_length_topic_echo", out == ["data: Hello...", "---"], out)
-    for case, args, expected in (
-        ("test_topic_echo_field", ["/arrays", "--field", "alignment_check"], ["0", "---"]),
-        ("test_topic_echo_multi_fields", ["/defaults", "--field", "int8_value", "--field", "uint8_value"],
-         ["-50", "200", "---"]),
-        ("test_topic_echo_field_nested", ["/cmd_vel", "--field", "twist.angular"], ["x: 0.0", "y: 0.0", "z: 0.0", "---"]),
-        ("test_topic_echo_field_array", ["/arrays", "--field", "float32_values_default.[2]"], ["-1.125", "---"]),
-        ("test_topic_echo_multi_fields_nested", ["/cmd_vel", "--field", "twist.linear.x", "--field", "twist.linear.y"],
-         ["1.0", "0.0", "---"]),
-        ("test_topic_echo_multi_fields_array", ["/arrays", "--field", "float32_values_default.[2]", "--field",
-         "string_values_default.[1]"], ["-1.125", "max value", "---"]),
-    ):  # fmt: skip
+    for case, args, expected in FIELD_CASES:
         out = echo(*args).stdout.splitlines()
         c.check(case, out == expected, out)
-    for case, args, expected in (
-        ("test_topic_echo_field_not_a_member", ["--field", "not_member"],
-         "Invalid field 'not_member': 'Arrays' object has no attribute 'not_member'"),
-        ("test_topic_echo_multi_fields_not_a_member", ["--field", "alignment_check", "--field", "not_member"],
-         "Invalid field 'not_member': 'Arrays' object has no attribute 'not_member'"),
-        ("test_topic_echo_field_invalid", ["--field", "."], "Invalid field value '.'"),
-        ("test_topic_echo_multi_fields_invalid", ["--field", "alignment_check", "--field", "."],
-         "Invalid field value '.'"),
-    ):  # fmt: skip
+    for case, args, message in BAD_FIELD_CASES:
         got = echo("/arrays", *args)
-        c.check(case, expected in got.stderr and got.returncode != 0, got)
+        c.check(case, message in got.stderr and got.returncode != 0, got)
     # ros2 prints this warning and gives up; rostool prints it and waits for a publisher (--timeout ends it)
-    none = ros2(env, "topic", "echo", "/this_topic_has_no_pub", "--timeout", "1")
+    none = ran("topic", "echo", "/this_topic_has_no_pub", "--timeout", "1")
     c.check("test_topic_echo_no_publisher", none.returncode == 1
             and "WARNING: topic [/this_topic_has_no_pub] does not appear to be published yet" in none.stderr,
             none)  # fmt: skip
-    raw = ros2(env, "topic", "echo", "--raw", "--once", "/chatter", "std_msgs/msg/String").stdout.splitlines()
+    raw = ran("topic", "echo", "--raw", "--once", "/chatter", "std_msgs/msg/String").stdout.splitlines()
     c.check("test_echo_raw", len(raw) == 2 and raw[0].startswith("b'\\x00\\x01\\x00\\x00") and "Hello World" in raw[0]
             and raw[1] == "---", raw)  # fmt: skip
-    for case, extra in (("test_echo_basic", []), ("test_echo_basic[compatible_qos]",
-                        ["--qos-reliability", "best_effort", "--qos-durability", "volatile"]),
-                        ("test_echo_basic[message_lost]", ["--lost-messages"])):  # fmt: skip
-        out = ros2(
-            env,
-            "topic",
-            "echo",
-            *extra,
-            "--once",
-            "/chit_chatter_echo_source",
-            "std_msgs/String",
-            "--timeout",
-            "0.1",
-        )  # nothing publishes there: TYPE lets echo wait instead of failing
+    for case, extra in BASIC_CASES:
+        out = ran(*waiting_echo(extra))
         c.check(f"{case} (no publisher with TYPE waits)", "Could not determine" not in out.stderr, out)
-        out = ros2(env, "topic", "echo", *extra, "--once", "/chatter", "std_msgs/String").stdout.splitlines()
+        out = ran("topic", "echo", *extra, "--once", "/chatter", "std_msgs/String").stdout.splitlines()
         c.check(case, out[0].startswith("data: 'Hello World: "), out)
-    # ros2cli's options of the topic verbs that rostool takes and ignores (no rate measured: not `alone`)
-    for args in (["hz", "/chatter", "--spin-time", "1", "-s", "--no-daemon", "--duration", "1.5"],
-                 ["bw", "/chatter", "--spin-time", "1", "-s", "--duration", "1.5"],
-                 ["list", "--no-daemon", "--spin-time", "1", "-s"]):  # fmt: skip
-        got = ros2(env, "topic", *args)
+    for args in IGNORED_TOPIC_OPTIONS:
+        got = ran("topic", *args)
         c.check(f"accepted and ignored: topic {' '.join(args)}", got.returncode == 0, got)
     c.done()
 
@@ -320,17 +373,22 @@ def test_topic_rates(served_env: dict[str, str], fixture_graph: dict[str, RclpyP
 
 
 def test_node_list_and_info(served_env: dict[str, str], fixture_graph: dict[str, RclpyPeer]) -> None:
-    env, c = served_env, Cases()
+    c = Cases()
     visible = ["/listener", "/repeater", "/talker"]
-    out = ros2(env, "node", "list").stdout.splitlines()
+    ran = side_by_side(
+        served_env, ("node", "list"), ("node", "list", "-a"), ("node", "list", "-c"), ("node", "list", "-c", "-a"),
+        ("node", "info", "/repeater"), ("node", "info", "/_hidden_talker"),
+        ("node", "info", "/_hidden_talker", "--include-hidden"),
+    )  # fmt: skip
+    out = ran("node", "list").stdout.splitlines()
     c.check("test_list_nodes", out == visible, out)
-    out = ros2(env, "node", "list", "-a").stdout.splitlines()
+    out = ran("node", "list", "-a").stdout.splitlines()
     c.check("test_list_all_nodes", out == ["/_hidden_talker", *visible], out)
-    out = ros2(env, "node", "list", "-c").stdout
+    out = ran("node", "list", "-c").stdout
     c.check("test_list_node_count", out == "3\n", out)
-    out = ros2(env, "node", "list", "-c", "-a").stdout
+    out = ran("node", "list", "-c", "-a").stdout
     c.check("test_list_all_nodes_count", out == "4\n", out)
-    lines = ros2(env, "node", "info", "/repeater").stdout.splitlines()
+    lines = ran("node", "info", "/repeater").stdout.splitlines()
     c.check(
         "test_info_node",
         lines[:2] == ["/repeater", "  Subscribers:"]
@@ -344,10 +402,10 @@ def test_node_list_and_info(served_env: dict[str, str], fixture_graph: dict[str,
         and lines[-4:] == ["  Action Servers:", "", "  Action Clients:", ""],  # ros2node: empty sections
         lines,
     )
-    hidden = ros2(env, "node", "info", "/_hidden_talker")
+    hidden = ran("node", "info", "/_hidden_talker")
     c.check("test_info_hidden_node_no_hidden_flag", hidden.returncode == 1
             and "Unable to find node '/_hidden_talker'" in hidden.stderr, hidden)  # fmt: skip
-    lines = ros2(env, "node", "info", "/_hidden_talker", "--include-hidden").stdout.splitlines()
+    lines = ran("node", "info", "/_hidden_talker", "--include-hidden").stdout.splitlines()
     c.check("test_info_hidden_node_hidden_flag", lines[0] == "/_hidden_talker"
             and "    /_hidden_chatter: std_msgs/msg/String" in lines, lines)  # fmt: skip
     c.done()

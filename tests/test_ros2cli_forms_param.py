@@ -23,9 +23,9 @@ from typing import Any
 import pytest
 import yaml
 
-from tests.ros2_peers import RclpyPeer, WarmDaemon, peer_env
+from tests.ros2_peers import RclpyPeer, StartPeer, WarmDaemon
 from tests.support import rostool, wait_until
-from tests.test_ros2cli_forms import Cases, Start
+from tests.test_ros2cli_forms import Cases
 
 GET_VERB_PARAM_VALUES = {
     "bool_param": "Boolean value is: True\n",
@@ -112,19 +112,14 @@ def not_found(result: Any) -> bool:
 
 
 @pytest.fixture
-def param_graph(
-    warm_daemon: WarmDaemon, graph_env: dict[str, str], start_peer: Start, tmp_path: Path
-) -> dict[str, RclpyPeer]:
+def param_graph(warm_daemon: WarmDaemon, start_peer: StartPeer) -> dict[str, RclpyPeer]:
     """The three parameter nodes, started side by side; the test's warm daemon knows all three."""
     roles = {
-        "param_node": ("--name", "param_node", "--ros2cli-params", "param_node"),
-        "hidden": ("--name", "_hidden_param_node", "--ros2cli-params", "param_node"),
-        "test_node": ("--name", "test_node", "--namespace", "/foo", "--ros2cli-params", "parameter_node"),
+        "param_node": ["--name", "param_node", "--ros2cli-params", "param_node"],
+        "hidden": ["--name", "_hidden_param_node", "--ros2cli-params", "param_node"],
+        "test_node": ["--name", "test_node", "--namespace", "/foo", "--ros2cli-params", "parameter_node"],
     }
-    peer_env(graph_env, tmp_path)  # writes the peers' profile once, before the threads read it
-    with ThreadPoolExecutor(max_workers=len(roles)) as pool:
-        started = {key: pool.submit(start_peer, *args) for key, args in roles.items()}
-    peers = {key: future.result() for key, future in started.items()}
+    peers = dict(zip(roles, start_peer.together(*roles.values()), strict=True))
     warm_daemon.ready()
     assert wait_until(lambda: warm_daemon.graph_size()["nodes"] == len(peers), timeout=20)
     return peers

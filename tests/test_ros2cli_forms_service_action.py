@@ -20,9 +20,9 @@ from typing import Any
 
 import pytest
 
-from tests.ros2_peers import PEERS_DIR, RclpyPeer, WarmDaemon, peer_python, serving
+from tests.ros2_peers import PEERS_DIR, RclpyPeer, StartPeer, WarmDaemon, peer_python, serving
 from tests.support import Watched, rostool, rostool_popen, wait_until
-from tests.test_ros2cli_forms import Cases, Start
+from tests.test_ros2cli_forms import Cases, Start, side_by_side
 
 PARAMETER_SERVICES = 6
 
@@ -59,11 +59,11 @@ def service_daemon(service_env: dict[str, str]) -> Iterator[WarmDaemon]:
 
 
 @pytest.fixture
-def echo_servers(service_daemon: WarmDaemon, start_peer: Start) -> list[RclpyPeer]:
-    peers = [
-        start_peer("--name", "echo_server", "--namespace", "/my_ns", "--echo-service", "echo"),
-        start_peer("--name", "_hidden_echo_server", "--namespace", "/my_ns", "--echo-service", "_echo"),
-    ]
+def echo_servers(service_daemon: WarmDaemon, start_peer: StartPeer) -> list[RclpyPeer]:
+    peers = start_peer.together(
+        ["--name", "echo_server", "--namespace", "/my_ns", "--echo-service", "echo"],
+        ["--name", "_hidden_echo_server", "--namespace", "/my_ns", "--echo-service", "_echo"],
+    )
     service_daemon.ready()
     # the daemon knows both servers' nodes (names come after the endpoints)
     assert wait_until(lambda: service_daemon.graph_size()["nodes"] == len(peers), timeout=20)
@@ -92,31 +92,41 @@ def lines_match(lines: list[str], expected: list[Any]) -> bool:
 
 @pytest.mark.parametrize("distro", ["jazzy"])
 def test_service_cases(distro: str, service_daemon: WarmDaemon, echo_servers: list[RclpyPeer]) -> None:
+    """The listings side by side (they change nothing), then the calls one after the other (rostool's DDS
+    client of a Fast DDS server takes the first reply after its request: rostool/graph/ros2/services.py)."""
     env, c = service_daemon.env, Cases()
-    out = ros2(env, "service", "list").stdout.splitlines()
+    listed = side_by_side(
+        env, ("service", "list"), ("service", "list", "--include-hidden-services"), ("service", "list", "-t"),
+        ("service", "list", "-c"), ("service", "find", "test_msgs/srv/BasicTypes"),
+        ("service", "find", "--include-hidden-services", "test_msgs/srv/BasicTypes"),
+        ("service", "find", "-c", "test_msgs/srv/BasicTypes"), ("service", "find", "not_a_service_type"),
+        ("service", "type", "/my_ns/echo"), ("service", "type", "/not_a_service"), ("service", "info", "/my_ns/echo"),
+        ("service", "list", "--no-daemon", "--spin-time", "1", "-s"),
+    )  # fmt: skip
+    out = listed("service", "list").stdout.splitlines()
     c.check(
         "test_list_services", lines_match(out, ["/my_ns/echo", *node_services("/my_ns/echo_server")]), out
     )
-    out = ros2(env, "service", "list", "--include-hidden-services").stdout.splitlines()
+    out = listed("service", "list", "--include-hidden-services").stdout.splitlines()
     c.check("test_list_hidden", lines_match(out, ["/my_ns/_echo", *node_services("/my_ns/_hidden_echo_server"),
             "/my_ns/echo", *node_services("/my_ns/echo_server")]) and out[0] == "/my_ns/_echo", out)  # fmt: skip
-    out = ros2(env, "service", "list", "-t").stdout.splitlines()
+    out = listed("service", "list", "-t").stdout.splitlines()
     c.check("test_list_with_types", "/my_ns/echo [test_msgs/srv/BasicTypes]" in out and len(out) == 8
             and sum(bool(re.fullmatch(r"/my_ns/echo_server/.*parameter.* \[rcl_interfaces/srv/.*Parameter.*\]", x))
                     for x in out) == PARAMETER_SERVICES, out)  # fmt: skip
-    out = ros2(env, "service", "list", "-c").stdout.splitlines()
+    out = listed("service", "list", "-c").stdout.splitlines()
     c.check("test_list_count (7 + get_type_description)", out == ["8"], out)
-    out = ros2(env, "service", "find", "test_msgs/srv/BasicTypes").stdout
+    out = listed("service", "find", "test_msgs/srv/BasicTypes").stdout
     c.check("test_find", out == "/my_ns/echo\n", out)
-    out = ros2(env, "service", "find", "--include-hidden-services", "test_msgs/srv/BasicTypes").stdout
+    out = listed("service", "find", "--include-hidden-services", "test_msgs/srv/BasicTypes").stdout
     c.check("test_find_hidden", out == "/my_ns/_echo\n/my_ns/echo\n", out)
-    out = ros2(env, "service", "find", "-c", "test_msgs/srv/BasicTypes").stdout
+    out = listed("service", "find", "-c", "test_msgs/srv/BasicTypes").stdout
     c.check("test_find_count", out == "1\n", out)
-    got = ros2(env, "service", "find", "not_a_service_type")
+    got = listed("service", "find", "not_a_service_type")
     c.check("test_find_not_a_service_type", got.returncode == 0 and got.stdout == "", got)
-    out = ros2(env, "service", "type", "/my_ns/echo").stdout
+    out = listed("service", "type", "/my_ns/echo").stdout
     c.check("test_type", out == "test_msgs/srv/BasicTypes\n", out)
-    got = ros2(env, "service", "type", "/not_a_service")
+    got = listed("service", "type", "/not_a_service")
     c.check("test_type_on_not_a_service", got.returncode == 1 and got.stdout == "", got)
     got = ros2(env, "service", "call", "/my_ns/echo", "test_msgs/srv/BasicTypes")
     c.check(
@@ -138,13 +148,13 @@ def test_service_cases(distro: str, service_daemon: WarmDaemon, echo_servers: li
     repeated.wait_for(lambda out: len(out.splitlines()) >= 2 * len(expected), timeout=30)
     out, _err = repeated.stop()
     c.check("test_repeated_call", out.splitlines()[: 2 * len(expected)] == 2 * expected, out)
-    out = ros2(env, "service", "info", "/my_ns/echo").stdout
+    out = listed("service", "info", "/my_ns/echo").stdout
     c.check(
         "service info (Jazzy+)",
         out == "Type: test_msgs/srv/BasicTypes\nClients count: 0\nServices count: 1\n",
         out,
     )
-    got = ros2(env, "service", "list", "--no-daemon", "--spin-time", "1", "-s")
+    got = listed("service", "list", "--no-daemon", "--spin-time", "1", "-s")
     c.check("accepted and ignored: service list --no-daemon --spin-time 1 -s", got.returncode == 0, got)
     c.done()
 
@@ -207,30 +217,38 @@ def test_action_cases(warm_daemon: WarmDaemon, start_peer: Start) -> None:
     start_peer("--name", "fibonacci_action_server", "--action", "/fibonacci")
     warm_daemon.ready()
     assert wait_until(lambda: warm_daemon.graph_size()["actions"] == 1, timeout=20)
-    got = ros2(env, "action", "info", "/not_an_action")
+    # the reads side by side (they change nothing), the goals one after the other
+    listed = side_by_side(
+        env, ("action", "info", "/not_an_action"), ("action", "info", "/fibonacci"),
+        ("action", "info", "-t", "/fibonacci"), ("action", "info", "-c", "/fibonacci"), ("action", "list"),
+        ("action", "list", "-t"), ("action", "list", "-c"), ("action", "type", "/fibonacci"),
+        ("action", "type", "/not_an_action"), ("action", "find", "test_msgs/action/Fibonacci"),
+        ("action", "find", "-c", "test_msgs/action/Fibonacci"),
+    )  # fmt: skip
+    got = listed("action", "info", "/not_an_action")
     # ros2cli exits 0; rostool prints the same lines, then its error line, and exits 1 (its rule)
     c.check("test_info_on_nonexistent_action (exit 1 by rule)", got.returncode == 1 and got.stdout.splitlines()
             == ["Action: /not_an_action", "Action clients: 0", "Action servers: 0"], got)  # fmt: skip
-    out = ros2(env, "action", "info", "/fibonacci").stdout.splitlines()
+    out = listed("action", "info", "/fibonacci").stdout.splitlines()
     c.check("test_fibonacci_info", out == ["Action: /fibonacci", "Action clients: 0", "Action servers: 1",
             "    /fibonacci_action_server"], out)  # fmt: skip
-    out = ros2(env, "action", "info", "-t", "/fibonacci").stdout.splitlines()
+    out = listed("action", "info", "-t", "/fibonacci").stdout.splitlines()
     c.check(
         "test_fibonacci_info_with_types",
         out[-1] == "    /fibonacci_action_server [test_msgs/action/Fibonacci]",
         out,
     )
-    out = ros2(env, "action", "info", "-c", "/fibonacci").stdout.splitlines()
+    out = listed("action", "info", "-c", "/fibonacci").stdout.splitlines()
     c.check(
         "test_fibonacci_info_count",
         out == ["Action: /fibonacci", "Action clients: 0", "Action servers: 1"],
         out,
     )
-    out = ros2(env, "action", "list").stdout
+    out = listed("action", "list").stdout
     c.check("test_list", out == "/fibonacci\n", out)
-    out = ros2(env, "action", "list", "-t").stdout
+    out = listed("action", "list", "-t").stdout
     c.check("test_list_with_types", out == "/fibonacci [test_msgs/action/Fibonacci]\n", out)
-    out = ros2(env, "action", "list", "-c").stdout
+    out = listed("action", "list", "-c").stdout
     c.check("test_list_count", out == "1\n", out)
     got = ros2(env, "action", "send_goal", "/fibonacci", "test_msgs/action/Fibonacci", "{order: 5}")
     lines, expected = got.stdout.splitlines(), fibonacci_send_goal_output(5)
@@ -239,12 +257,12 @@ def test_action_cases(warm_daemon: WarmDaemon, start_peer: Start) -> None:
     got = ros2(env, "action", "send_goal", "-f", "/fibonacci", "test_msgs/action/Fibonacci", "{order: 5}")
     c.check("test_send_fibonacci_goal_with_feedback", got.returncode == 0
             and in_order(fibonacci_send_goal_output(5, with_feedback=1), got.stdout.splitlines()), got)  # fmt: skip
-    out = ros2(env, "action", "type", "/fibonacci").stdout
+    out = listed("action", "type", "/fibonacci").stdout
     c.check("action type (Kilted)", out == "test_msgs/action/Fibonacci\n", out)
-    got = ros2(env, "action", "type", "/not_an_action")
+    got = listed("action", "type", "/not_an_action")
     c.check("action type of no action (Kilted)", got.returncode == 1 and got.stdout == "", got)
-    out = ros2(env, "action", "find", "test_msgs/action/Fibonacci").stdout
+    out = listed("action", "find", "test_msgs/action/Fibonacci").stdout
     c.check("action find (Kilted)", out == "/fibonacci\n", out)
-    out = ros2(env, "action", "find", "-c", "test_msgs/action/Fibonacci").stdout
+    out = listed("action", "find", "-c", "test_msgs/action/Fibonacci").stdout
     c.check("action find -c (Kilted)", out == "1\n", out)
     c.done()
