@@ -4,10 +4,12 @@ ARGS` for B in dds and rclpy, each result recorded for docs/ros2cli-parity.md (t
 
 ros2 runs as a user's would: with its daemon (started and warmed up once per module, stopped at its end),
 the loopback-only Fast DDS profile and the module's ROS_DOMAIN_ID. So does rostool: verbs that list the graph
-are answered by its graph daemon of each backend (warmed up beside ros2's), and the cases a module names
-`direct` are asked once more without it, so that the direct paths keep their referee too. Verbs that list
-the graph run one after another (each tool is a node that the others would see); the others run side by
-side.
+are answered by its graph daemon of each backend (warmed up beside ros2's), echoes are relayed by it, and the
+cases a module names `direct` are asked once more without it, so that the direct paths keep their referee
+too. One `ros2` run is the referee of both backends. Verbs that list the graph run one after another (each
+tool is a node that the others would see); a case that needs an event (`poke`) runs each tool alone; the
+others run side by side. Waits for the daemons ask them in this process (`Ros2Daemon`, `daemon_answer`),
+never by a `ros2` or `rostool` run per poll.
 """
 
 from __future__ import annotations
@@ -21,11 +23,13 @@ import subprocess
 import sys
 import threading
 import time
+import xmlrpc.client
 from collections import Counter
 from collections.abc import Callable, Iterator
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -122,9 +126,11 @@ class Case:
     error: bool = False
     timeout: float = 30.0
     name: str = ""  # how the results name it, when its arguments hold a temporary path
-    served: bool = True  # a listing: answered by rostool's daemon (False: a count that would include it)
-    # ros2 ARGS run every second while the tools wait, for a case that needs an event to print (a
-    # parameter set for /parameter_events): each tool gets one however late it subscribed
+    # asked through rostool's daemon when it serves the verb (a listing, a subscription it relays), as users
+    # run it (False: a count that would include the daemon)
+    served: bool = True
+    # rostool ARGS (DDS backend) run while each tool waits, for a case that needs an event to print on its
+    # topic, its last argument (a parameter set for /parameter_events): see ParityGraph.poked
     poke: tuple[str, ...] = ()
     stdin: str | None = None
 
@@ -180,6 +186,55 @@ def _run(command: list[str], env: dict[str, str], timeout: float, stdin: str | N
     return Run(process.returncode, out, err)
 
 
+class Ros2Daemon:
+    """ros2's daemon asked in this process, over the XML-RPC on which every `ros2` run asks it (127.0.0.1,
+    port 11511 + ROS_DOMAIN_ID; ros2cli/daemon/__init__.py): a wait polls it without starting a `ros2`
+    (0.35 s of CPU) per poll. None while it does not answer."""
+
+    def __init__(self, env: dict[str, str]) -> None:
+        self.url = f"http://127.0.0.1:{11511 + int(env['ROS_DOMAIN_ID'])}/ros2cli/"
+
+    def ask(self, method: str, *args: object) -> Any:
+        try:
+            with xmlrpc.client.ServerProxy(self.url, allow_none=True) as proxy:
+                return getattr(proxy, method)(*args)
+        except (OSError, xmlrpc.client.Error):
+            return None
+
+    def nodes(self, hidden: bool = False) -> list[str] | None:
+        """Full node names, as `ros2 node list` (`-a`: `hidden`) prints them."""
+        found = self.ask("get_node_names_and_namespaces")
+        if found is None:
+            return None
+        return [
+            namespace.rstrip("/") + "/" + name
+            for name, namespace in found
+            if hidden or not name.startswith("_")
+        ]
+
+    def names(self, method: str) -> set[str]:
+        """The names of a get_*_names_and_types answer (topics, services, actions)."""
+        return {name for name, _types in self.ask(method) or []}
+
+
+def daemon_answer(daemon: WarmDaemon, method: str, *args: object) -> Any:
+    """rostool's graph daemon's answer to a Graph query (`node_names`: what `node list -a` through it
+    prints), asked in this process through rostool's own client; None while it does not answer."""
+    from rostool.errors import RostoolError
+    from rostool.graph.daemon.client import DaemonAbsent, DaemonSilent, every_daemon
+
+    try:
+        (client,) = every_daemon(daemon.env)  # its runtime directory holds that one daemon
+        return client.query(method, list(args))
+    except (ValueError, DaemonAbsent, DaemonSilent, RostoolError):
+        return None
+
+
+# verbs whose subscription rostool's daemon relays (rostool/graph/daemon/relay_server.py): a run through it
+# costs about half the CPU of one that joins the graph itself, and needs no discovery
+RELAYED = {"topic echo"}
+
+
 class ParityGraph:
     """The module's real nodes and the ways of asking them: ros2 (its daemon), rostool on each backend
     through its graph daemon (`served`) and without one."""
@@ -194,6 +249,7 @@ class ParityGraph:
         )
         self.peers = [RclpyPeer(DISTRO, self.env, tmp, args) for args in peers]
         self.daemons: dict[str, WarmDaemon] = {}
+        self.ros2_daemon = Ros2Daemon(self.env)
         self.outcomes: list[Outcome] = []
 
     def ros2(self, args: list[str], timeout: float = 30, stdin: str | None = None) -> Run:
@@ -214,7 +270,12 @@ class ParityGraph:
     def no_run_left(self) -> None:
         """Wait (up to 5 s) until ros2's daemon no longer lists a rostool run on the rclpy backend (a node
         while it runs, gone ~0.5 s after it ended)."""
-        wait_until(lambda: not _RUN_NODE.search(self.ros2(["node", "list", "-a"]).stdout), 5, 0.2)
+
+        def gone() -> bool:
+            nodes = self.ros2_daemon.nodes(hidden=True)
+            return nodes is not None and not any(_RUN_NODE.search(node) for node in nodes)
+
+        wait_until(gone, 5)
 
     def ros2_command(self, args: list[str]) -> list[str]:
         return [str(ROS2), *args]
@@ -243,36 +304,53 @@ class ParityGraph:
         without them (`Outcome.direct`)."""
         # the rclpy backend before the DDS one: its node has left ros2's view by the next case
         order = ("rclpy", "dds")
-        served = case.graph and case.served
+        served = case.served and (case.graph or case.verb in RELAYED)
         jobs: list[Callable[[], Run]] = [lambda: self.ros2_steady(list(case.args), case.timeout, case.stdin)]
         jobs += [
             lambda b=b: self.rostool(b, list(case.args), case.timeout, case.stdin, served) for b in order
         ]
         if direct:
             jobs += [lambda b=b: self.rostool(b, list(case.args), case.timeout, case.stdin) for b in order]
-        if case.graph and not served:
+        if case.graph and not case.served:
             # a count of every node: the previous run on the rclpy backend must have left everyone's view
             runs = [(self.no_run_left(), job())[1] for job in jobs]
         elif case.graph:
             runs = [job() for job in jobs]
+        elif case.poke:
+            runs = [self.poked(job, case) for job in jobs]
         else:
-            with ThreadPoolExecutor(len(jobs) + 1) as pool:
-                done = threading.Event()
-                if case.poke:
-                    pool.submit(self._poke, list(case.poke), done)
-                try:
-                    runs = list(pool.map(lambda job: job(), jobs))
-                finally:
-                    done.set()
+            with ThreadPoolExecutor(len(jobs)) as pool:
+                runs = list(pool.map(lambda job: job(), jobs))
         outcome = Outcome(case, runs[0], dict(zip(order, runs[1:3], strict=True)))
         if direct:
             outcome.direct = dict(zip(order, runs[3:], strict=True))
         self.outcomes.append(outcome)
         return outcome
 
-    def _poke(self, args: list[str], done: threading.Event) -> None:
-        while not done.wait(1.0):
-            self.ros2(args)
+    def poked(self, job: Callable[[], Run], case: Case) -> Run:
+        """One tool's run of a case that needs an event, alone, while rostool's DDS backend runs `case.poke`:
+        once ros2's daemon counts one more subscription of the topic than before (at most 3 s), then every
+        second. Alone and poked by no rclpy node, since every new rclpy node (a `ros2` run, a rostool run
+        on the rclpy backend) publishes a ParameterEvent of its own as it starts (use_sim_time declared),
+        which an echo already subscribed took first under load (2 runs in 15 beside two busy loops)."""
+        topic = case.args[-1]
+        before = self.ros2_daemon.ask("count_subscribers", topic) or 0
+        done = threading.Event()
+
+        def poke() -> None:
+            wait_until(
+                lambda: done.is_set() or (self.ros2_daemon.ask("count_subscribers", topic) or 0) > before, 3
+            )
+            while not done.is_set():
+                self.rostool("dds", list(case.poke))
+                done.wait(1.0)
+
+        with ThreadPoolExecutor(1) as pool:
+            pool.submit(poke)
+            try:
+                return job()
+            finally:
+                done.set()
 
     def warm_up(self, ready: Callable[[ParityGraph], bool]) -> None:
         """Start ros2's daemon and rostool's (one per backend) and wait until each has seen the whole graph
@@ -286,18 +364,16 @@ class ParityGraph:
         self.ros2(["daemon", "start"])
         for daemon in self.daemons.values():
             daemon.ready()
-        assert wait_until(lambda: ready(self), timeout=30, interval=0.2), "ros2's daemon never saw the graph"
-        whole = self.ros2(["node", "list", "-a"]).stdout.splitlines()
-        peers = Counter(line for line in whole if not _DAEMONS.search(line))  # twins count twice
-        for backend in self.daemons:
+        # asked in this process: a `ros2` or `rostool` run per poll cost 0.1-0.4 s of CPU each
+        assert wait_until(lambda: ready(self), timeout=30), "ros2's daemon never saw the graph"
+        whole = self.ros2_daemon.nodes(hidden=True) or []
+        peers = Counter(name for name in whole if not _DAEMONS.search(name))  # twins count twice
+        for backend, daemon in self.daemons.items():
 
-            def seen(backend: str = backend) -> bool:
-                listed = self.rostool(backend, ["node", "list", "-a"], served=True).stdout.splitlines()
-                return peers <= Counter(listed)
+            def seen(daemon: WarmDaemon = daemon) -> bool:
+                return peers <= Counter(daemon_answer(daemon, "node_names") or [])
 
-            assert wait_until(seen, timeout=30, interval=0.2), (
-                f"rostool's {backend} daemon never saw the graph"
-            )
+            assert wait_until(seen, timeout=30), f"rostool's {backend} daemon never saw the graph"
 
     def close(self) -> None:
         self.ros2(["daemon", "stop"])
@@ -356,9 +432,20 @@ def judge(case: Case, backend: str, result: str, why: str = "") -> None:
     }  # fmt: skip
 
 
-def wait_ros2(graph: ParityGraph, args: list[str], expected: str, timeout: float = 20) -> bool:
+def wait_ros2(
+    graph: ParityGraph,
+    args: list[str],
+    expected: str,
+    timeout: float = 20,
+    gate: Callable[[], bool] | None = None,
+) -> bool:
+    """Until `ros2 ARGS` prints `expected`; `gate`: a check in this process (ros2's daemon asked directly)
+    that must pass before each run, so that ros2 runs only once what it waits for is likely there."""
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
+        if gate is not None and not gate():
+            time.sleep(0.05)
+            continue
         if expected in graph.ros2(args).stdout:
             return True
     return False
