@@ -254,9 +254,9 @@ class WarmDaemon:
         self._starting = None
         assert "The daemon has been started" in out or "already running" in out, f"daemon start: {out}{err}"
 
-    def graph_size(self) -> dict[str, int]:
-        """What the daemon holds now (its status's graph: nodes, topics, services, actions), asked on its
-        socket from this process: a `daemon status --json` run per poll cost a Python start-up each."""
+    def status(self) -> dict[str, Any]:
+        """The daemon's status (`daemon status --json`'s object), asked on its socket from this process: a
+        `daemon status --json` run per poll cost a Python start-up each."""
         from rostool.graph.daemon.client import DaemonClient
         from rostool.graph.daemon.place import DaemonPlace
 
@@ -266,7 +266,11 @@ class WarmDaemon:
         place = DaemonPlace(path.stem, path, path.with_suffix(".lock"), path.with_suffix(".log"), ())
         found = DaemonClient("auto", self.env, place).status()
         assert found is not None, f"no daemon answers on {path}"
-        return dict(found["graph"])
+        return found
+
+    def graph_size(self) -> dict[str, int]:
+        """What the daemon holds now (its status's graph: nodes, topics, services, actions)."""
+        return dict(self.status()["graph"])
 
     def held_locks(self) -> list[int]:
         """The pids of daemons still holding a lock in the runtime directory."""
