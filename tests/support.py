@@ -184,6 +184,22 @@ def master_answers(uri: str) -> bool:
         return False
 
 
+def master_names(uri: str) -> dict[str, set[str]]:
+    """The ROS 1 master's graph at `uri` as getSystemState gives it (what rostopic/rosservice/rosnode list
+    ask): {"topics": published or subscribed, "services": ..., "nodes": ...}; empty sets if it does not
+    answer. Asked in process: a test waiting for a peer polls this instead of starting a tool per poll."""
+    try:
+        _code, _msg, (pubs, subs, srvs) = xmlrpc.client.ServerProxy(uri).getSystemState("/test")
+    except (OSError, xmlrpc.client.Error, ValueError, TypeError):
+        return {"topics": set(), "services": set(), "nodes": set()}
+    entries = [*pubs, *subs, *srvs]
+    return {
+        "topics": {str(name) for name, _nodes in [*pubs, *subs]},
+        "services": {str(name) for name, _nodes in srvs},
+        "nodes": {str(node) for _name, nodes in entries for node in nodes},
+    }
+
+
 def master_has_node(uri: str, name: str) -> bool:
     """Whether node `name` is registered with the ROS 1 master at `uri` (XML-RPC lookupNode, as rosnode
     asks): its own XML-RPC server answers by then."""

@@ -17,6 +17,7 @@ from tests.support import (
     debian,
     debian_popen,
     interface_workspace,
+    master_names,
     rostool,
     rostool_popen,
     start_rospy_script,
@@ -135,7 +136,11 @@ def _start_server(env: dict[str, str], tmp_path: Path) -> tuple[subprocess.Popen
     server = start_rospy_script(NAV_SERVER, env, tmp_path, "action_server")
     lines = Lines(server.stdout)
     lines.wait_for("READY")
-    assert wait_until(lambda: ACTION in rostool(["action", "list"], env).stdout.split(), 20)
+    # until the master knows the action's five topics (asked in process), then rostool's list must show it
+    parts = {f"{ACTION}/{part}" for part in ("goal", "cancel", "status", "feedback", "result")}
+    assert wait_until(lambda: parts <= master_names(env["ROS_MASTER_URI"])["topics"], 20), parts
+    listed = rostool(["action", "list"], env)
+    assert ACTION in listed.stdout.split(), listed.stderr
     return server, lines
 
 

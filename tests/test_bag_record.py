@@ -13,7 +13,16 @@ from pathlib import Path
 import yaml
 
 from tests.peers import HELLO_PUBLISHER
-from tests.support import debian, debian_popen, rostool, rostool_popen, start_rospy_script, stop, wait_until
+from tests.support import (
+    Watched,
+    debian,
+    debian_popen,
+    rostool,
+    rostool_popen,
+    start_rospy_script,
+    stop,
+    wait_until,
+)
 from tests.test_bag_play import (
     COUNTER_PUBLISHER,
     TIMED_SUBSCRIBER,
@@ -134,14 +143,14 @@ def test_recorded_bag_opens_and_plays_in_debian_rosbag(debian_master: dict[str, 
     ours = json.loads(rostool(["bag", "info", "--json", str(bag)], env).stdout)
     assert ours["messages"] == len(hellos) + len(his)
     # Debian's rosbag play publishes exactly the recorded values
-    echo = debian_popen(["rostopic", "echo", "/hello_world"], env)
+    echo = Watched(debian_popen(["rostopic", "echo", "/hello_world"], env))
     try:
         wait_subscribed(env, "/hello_world")
         played = debian(["rosbag", "play", "-d", "1", "-r", "4", str(bag)], env, timeout=60)
         assert played.returncode == 0, played.stderr
-        time.sleep(0.5)
+        echo.wait_for(lambda text: len(echo_strings(text)) >= len(hellos), 10)
     finally:
-        out, _err = stop(echo)
+        out, _err = echo.stop()
     assert echo_strings(out) == hellos
 
 
@@ -272,17 +281,17 @@ def test_kill_9_then_reindex_keeps_every_flushed_message(
 
     # 2. killed mid-stream: no gap, and nothing published more than 0.5 s before the kill is missing
     recorder = record(env, tmp_path, ["/count", "-O", "mid.bag"])
-    counter = start_rospy_script(
-        COUNTER_PUBLISHER, env, tmp_path, "counter2", ["/count", "200", "100000", "1"]
+    counter = Watched(
+        start_rospy_script(COUNTER_PUBLISHER, env, tmp_path, "counter2", ["/count", "200", "100000", "1"])
     )
     try:
-        wait_until(lambda: bool(counter.stdout and counter.stdout.readline()), 30)
-        time.sleep(2.0)
+        # killed once 300 are out (1.5 s at 200 Hz): the recorder got the first ones over a second before
+        counter.wait_for(lambda out: out.count("\n") >= 300, 30)
         killed_at = time.time()
         recorder.kill()
         recorder.wait(10)
     finally:
-        published, _err = stop(counter)
+        published, _err = counter.stop()
     active = tmp_path / "mid.bag.active"
     assert rostool(["bag", "reindex", str(active)], env).returncode == 0
     recovered = active.rename(tmp_path / "mid.bag")

@@ -13,6 +13,7 @@ import pytest
 from tests.support import (
     debian,
     interface_workspace,
+    master_names,
     rostool,
     rostool_popen,
     start_rospy_script,
@@ -108,7 +109,10 @@ def _start(source: str, env: dict[str, str], tmp_path: Path, name: str) -> subpr
 
 
 def _wait_service(env: dict[str, str], name: str) -> None:
-    assert wait_until(lambda: name in rostool(["service", "list"], env).stdout.split(), 20), name
+    """Until the master knows service `name` (asked in process), then rostool's list must show it."""
+    assert wait_until(lambda: name in master_names(env["ROS_MASTER_URI"])["services"], 20), name
+    listed = rostool(["service", "list"], env)
+    assert name in listed.stdout.split(), listed.stderr
 
 
 def _book_w11(env: dict[str, str], tmp_path: Path) -> None:

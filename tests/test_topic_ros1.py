@@ -10,11 +10,23 @@ from pathlib import Path
 import pytest
 
 from tests.peers import FAST_PUBLISHER, HELLO_PUBLISHER, LATCHED_SCAN, TYPED_SUBSCRIBER
-from tests.support import debian, debian_popen, rostool, rostool_popen, start_rospy_script, stop, wait_until
+from tests.support import (
+    debian,
+    debian_popen,
+    master_names,
+    rostool,
+    rostool_popen,
+    start_rospy_script,
+    stop,
+    wait_until,
+)
 
 
 def _wait_topic(env: dict[str, str], topic: str) -> None:
-    assert wait_until(lambda: topic in rostool(["topic", "list"], env).stdout.split(), 20), topic
+    """Until the master knows `topic` (asked in process), then rostool's list must show it."""
+    assert wait_until(lambda: topic in master_names(env["ROS_MASTER_URI"])["topics"], 20), topic
+    listed = rostool(["topic", "list"], env)
+    assert topic in listed.stdout.split(), listed.stderr
 
 
 def test_their_publisher_our_list_info_type_echo(debian_master: dict[str, str], tmp_path: Path) -> None:
@@ -52,6 +64,10 @@ def test_echo_matches_rostopic_echo_byte_for_byte(debian_master: dict[str, str],
     node = start_rospy_script(LATCHED_SCAN, env, tmp_path, "scan")
     try:
         _wait_topic(env, "/pose")
+        # a filter that drops every message: its 2 s wait for one runs beside the other runs
+        dropping = rostool_popen(
+            ["topic", "echo", "/scan", "--timeout", "2", "--filter", "m.header.frame_id == 'map'"], env
+        )
         for topic in ("/scan", "/pose"):
             ours = rostool(["topic", "echo", topic, "-n", "1"], env).stdout
             theirs = debian(["rostopic", "echo", "-n", "1", topic], env).stdout
@@ -66,10 +82,8 @@ def test_echo_matches_rostopic_echo_byte_for_byte(debian_master: dict[str, str],
         assert csv[1].startswith("3000000007,") and ",map,0.1," in csv[1]
         kept = rostool(["topic", "echo", "/scan", "-n", "1", "--json", "--filter", "m.ranges[1] > 1.1"], env)
         assert json.loads(kept.stdout)["ranges"] == [1.0, 1.2000000476837158, 0.8999999761581421]
-        dropped = rostool(
-            ["topic", "echo", "/scan", "--timeout", "2", "--filter", "m.header.frame_id == 'map'"], env
-        )
-        assert dropped.returncode == 1 and dropped.stdout == ""
+        dropped, _err = dropping.communicate(timeout=30)
+        assert dropping.returncode == 1 and dropped == ""
     finally:
         stop(node)
 
