@@ -95,7 +95,11 @@ def ros2_sees(env: dict[str, str], nodes: list[str]) -> None:
 
 
 def same_as_ros2(tool: Tool, ros2: Ros2, args: list[str], attempts: int = 1) -> None:
-    theirs = ros2(args)
+    same_as(tool, ros2(args), args, attempts)
+
+
+def same_as(tool: Tool, theirs: subprocess.CompletedProcess[str], args: list[str], attempts: int = 1) -> None:
+    """rostool's run of `args` prints what the real ros2's run printed (`theirs`)."""
     for attempt in range(attempts):
         ours = tool(args)
         if (ours.stdout, ours.returncode) == (theirs.stdout, theirs.returncode) or attempt == attempts - 1:
@@ -140,11 +144,18 @@ def test_lifecycle_forms_print_what_ros2_prints(
     # the two lifecycle nodes and the real ros2's own daemon node
     assert wait_until(lambda: tool.daemon.graph_size()["nodes"] == 3, timeout=20)
     attempts = 3 if backend == "rclpy" else 1
+    # the real ros2's reads first, then rostool's: each `ros2` run is a new participant (its node calls the
+    # services), and rostool's daemon lets a newcomer describe itself (up to 1 s) before it answers a query,
+    # one query at a time; a rostool read beside a few of them could wait past the 3 s after which the verb
+    # answers directly and says so on stderr
+    forms = [(["lifecycle", *args], attempts) for args in LISTING_FORMS]
+    forms += [(["lifecycle", *args], 1) for args in NAMED_FORMS]
+    with ThreadPoolExecutor(max_workers=4) as pool:
+        theirs = list(pool.map(ros2, [args for args, _attempts in forms]))
     with ThreadPoolExecutor(max_workers=4) as pool:
         listed_run = pool.submit(tool, ["lifecycle", "list", NODE])
-        compared = [pool.submit(same_as_ros2, tool, ros2, ["lifecycle", *args], attempts)
-                    for args in LISTING_FORMS]  # fmt: skip
-        compared += [pool.submit(same_as_ros2, tool, ros2, ["lifecycle", *args]) for args in NAMED_FORMS]
+        compared = [pool.submit(same_as, tool, their, args, tries)
+                    for (args, tries), their in zip(forms, theirs, strict=True)]  # fmt: skip
     for done in compared:
         done.result()
     for args in SET_FORMS:
