@@ -85,8 +85,11 @@ def test_echo_receives_the_real_publishers_messages(graph_env: dict[str, str], s
 def test_hz_at_10_hz_and_1_khz(graph_env: dict[str, str], start_peer: Start) -> None:
     """hz agrees within 2 % with the rate the publisher itself counted over the same seconds (a Python
     publisher on a loaded machine does not keep exactly 1 kHz, so the nominal rate is no referee)."""
-    talkers = {"/slow": start_peer("--name", "slow", "--talk", "/slow", "--rate", "10")}
-    talkers["/fast"] = start_peer("--name", "fast", "--talk", "/fast", "--rate", "1000", "--depth", "1000")
+    slow, fast = side_by_side([  # the two start side by side: this test holds the whole suite
+        lambda: start_peer("--name", "slow", "--talk", "/slow", "--rate", "10"),
+        lambda: start_peer("--name", "fast", "--talk", "/fast", "--rate", "1000", "--depth", "1000"),
+    ])  # fmt: skip
+    talkers = {"/slow": slow, "/fast": fast}
     # both measured in the same window (the suite's serial end is one window long, not two)
     before = {topic: len(peer.of("published")) for topic, peer in talkers.items()}
     running = {topic: rostool_popen(["topic", "hz", topic, "--json", "--duration", "5.2"], graph_env)
