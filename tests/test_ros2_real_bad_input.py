@@ -6,9 +6,8 @@ from __future__ import annotations
 import signal
 import time
 from collections.abc import Callable
-from pathlib import Path
 
-from tests.ros2_peers import FASTDDS_PROFILE, RclpyPeer
+from tests.ros2_peers import RclpyPeer
 from tests.support import rostool, rostool_popen
 from tests.test_ros2_fastdds_rpc import in_lanes
 
@@ -27,17 +26,6 @@ def one_line_failure(args: list[str], env: dict[str, str], words: str, timeout: 
     assert done.returncode != 0, (args, done.stdout)
     lines = error_lines(done.stderr)
     assert len(lines) == 1 and words in lines[0], (args, done.stderr)
-
-
-# The peers' loopback profile with a short participant lease (Fast DDS's default is 20 s): a peer killed
-# with SIGKILL is declared gone after 3 s instead of 20. peer_env (tests/ros2_peers.py) writes its profile
-# into the test's tmp_path only when none is there, so this one, written first, is the one the peers read.
-SHORT_LEASE = FASTDDS_PROFILE.replace(
-    "<builtin>",
-    "<builtin>\n        <discovery_config>\n          <leaseDuration><sec>3</sec></leaseDuration>\n"
-    "          <leaseAnnouncement><sec>1</sec></leaseAnnouncement>\n        </discovery_config>",
-    1,
-)
 
 
 def test_unknown_names_and_a_wrong_service_type(graph_env: dict[str, str], start_peer: Start) -> None:
@@ -62,13 +50,10 @@ def test_unknown_names_and_a_wrong_service_type(graph_env: dict[str, str], start
              lanes, workers=3)  # fmt: skip
 
 
-def test_a_server_that_vanishes_mid_goal(
-    graph_env: dict[str, str], start_peer: Start, tmp_path: Path
-) -> None:
+def test_a_server_that_vanishes_mid_goal(graph_env: dict[str, str], start_peer: Start) -> None:
     """SIGKILL leaves no goodbye: the client notices when the server's participant lease ends (Fast DDS's
-    default 20 s; 3 s here, SHORT_LEASE) and says which call lost its server."""
-    (tmp_path / "fastdds_loopback.xml").write_text(SHORT_LEASE)
-    server = start_peer("--name", "server", "--action", "/fibonacci", "--step", "1.0")
+    default 20 s; 3 s here) and says which call lost its server."""
+    server = start_peer("--name", "server", "--action", "/fibonacci", "--step", "1.0", lease=3)
     goal = rostool_popen(["action", "send-goal", "/fibonacci", "test_msgs/action/Fibonacci", "{order: 30}"],
                          graph_env)  # fmt: skip
     server.wait_for("goal", timeout=20)
