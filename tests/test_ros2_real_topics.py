@@ -13,7 +13,7 @@ from collections.abc import Callable
 
 import pytest
 
-from tests.ros2_peers import RclpyPeer
+from tests.ros2_peers import RclpyPeer, StartPeer
 from tests.support import rostool, rostool_popen, side_by_side, stop
 
 Start = Callable[..., RclpyPeer]
@@ -82,13 +82,13 @@ def test_echo_receives_the_real_publishers_messages(graph_env: dict[str, str], s
 
 
 @pytest.mark.alone
-def test_hz_at_10_hz_and_1_khz(graph_env: dict[str, str], start_peer: Start) -> None:
+def test_hz_at_10_hz_and_1_khz(graph_env: dict[str, str], start_peer: StartPeer) -> None:
     """hz agrees within 2 % with the rate the publisher itself counted over the same seconds (a Python
     publisher on a loaded machine does not keep exactly 1 kHz, so the nominal rate is no referee)."""
-    slow, fast = side_by_side([  # the two start side by side: this test holds the whole suite
-        lambda: start_peer("--name", "slow", "--talk", "/slow", "--rate", "10"),
-        lambda: start_peer("--name", "fast", "--talk", "/fast", "--rate", "1000", "--depth", "1000"),
-    ])  # fmt: skip
+    slow, fast = start_peer.together(  # side by side: while they start, this test holds the whole suite
+        ["--name", "slow", "--talk", "/slow", "--rate", "10"],
+        ["--name", "fast", "--talk", "/fast", "--rate", "1000", "--depth", "1000"],
+    )
     talkers = {"/slow": slow, "/fast": fast}
     # both measured in the same window (the suite's serial end is one window long, not two)
     before = {topic: len(peer.of("published")) for topic, peer in talkers.items()}
