@@ -17,7 +17,7 @@ from typing import Any
 import pytest
 import yaml
 
-from tests.support import TESTDATA, rostool, rostool_popen, stop, wait_until
+from tests.support import TESTDATA, Watched, rostool, rostool_popen, stop, wait_until
 from tests.test_ros2_graph import ros2_env
 
 ROS2 = TESTDATA / "ros2"
@@ -231,7 +231,6 @@ def test_play_start_offset_and_playback_duration(start_peer: Peer, graph_env: di
     ]  # fmt: skip
     result = rostool(play, graph_env, timeout=60)
     assert result.returncode == 0, result.stderr
-    time.sleep(1.0)
     from rostool.bag.reader import BagReader
 
     with BagReader([ROS2 / "talker_mcap"]) as reader:
@@ -241,6 +240,7 @@ def test_play_start_offset_and_playback_duration(start_peer: Peer, graph_env: di
             for conn, stamp, raw in reader.messages(reader.select(["/topic"]))
             if start + 2e9 <= stamp <= start + 3.5e9
         ]
+    wait_until(lambda: len(listener.of("heard")) >= len(expected), timeout=10)
     assert [e["data"] for e in listener.of("heard")] == expected
 
 
@@ -346,7 +346,11 @@ def test_play_lists_in_one_value_exclusions_and_clock_topics(
     from rostool.bag.reader import BagReader
 
     listener = start_peer("--listen", "/talk")
-    clock = rostool_popen(["topic", "echo", "/clock", "rosgraph_msgs/msg/Clock", "--json"], graph_env)
+    with BagReader([ROS2 / "talker_mcap"]) as reader:
+        stamps = [stamp for _c, stamp, _raw in reader.messages(reader.select(["/topic"]))]
+    clock = Watched(
+        rostool_popen(["topic", "echo", "/clock", "rosgraph_msgs/msg/Clock", "--json"], graph_env)
+    )
     try:
         play = [
             "--ros2", "bag", "play", str(ROS2 / "talker_mcap"), "--topics", "/topic /rosout",
@@ -356,12 +360,12 @@ def test_play_lists_in_one_value_exclusions_and_clock_topics(
         result = rostool(play, graph_env, timeout=60)
         assert result.returncode == 0, result.stderr
         assert wait_until(lambda: len(listener.of("heard")) >= 10, timeout=10)
-        time.sleep(0.5)
+        clock.wait_for(
+            lambda text: sum(line.startswith("{") for line in text.splitlines()) >= len(stamps), 10
+        )
     finally:
-        out, _err = stop(clock)
+        out, _err = clock.stop()
     assert [e["data"] for e in listener.of("heard")] == [f"Hello, world! {i}" for i in range(10)]
-    with BagReader([ROS2 / "talker_mcap"]) as reader:
-        stamps = [stamp for _c, stamp, _raw in reader.messages(reader.select(["/topic"]))]
     import json
 
     clocks = [json.loads(line)["clock"] for line in out.splitlines() if line.startswith("{")]
