@@ -156,7 +156,7 @@ def test_real_ros2_bytes_are_recorded_unchanged(env: dict[str, str], tmp_path: P
     out = tmp_path / "replayed.mcap"
     recorder = rostool_popen(["bag", "record", "/rosout", "/topic", "-O", str(out)], env)
     try:
-        time.sleep(1.5)  # the recorder's readers exist before anything is played
+        # nothing is played before the recorder's readers exist: play waits for a subscriber on every topic
         selected = ["--topics", "/rosout", "/topic"]  # rosbag's form: the bag first
         played = rostool(["bag", "play", "-r", "4", "--wait-for-subscribers", str(TALKER), *selected], env)
         assert played.returncode == 0, played.stderr
