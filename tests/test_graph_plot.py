@@ -21,8 +21,8 @@ from pathlib import Path
 import pytest
 
 from tests.peers import FAST_PUBLISHER
-from tests.ros2_peers import RclpyPeer
-from tests.support import TESTDATA, debian_popen, start_rospy_script, stop, wait_until
+from tests.ros2_peers import RclpyPeer, StartPeer
+from tests.support import TESTDATA, debian_popen, master_names, start_rospy_script, stop, wait_until
 from tests.support import rostool as run_rostool
 
 SVG = "{http://www.w3.org/2000/svg}"
@@ -110,12 +110,14 @@ def test_graph_of_a_real_ros1_graph(debian_master: dict[str, str], tmp_path: Pat
 
 # --- rostool graph: ROS 2 ---------------------------------------------------------------------------------
 def test_graph_of_a_real_rclpy_talker_and_listener(
-    graph_env: dict[str, str], start_peer: Callable[..., RclpyPeer], tmp_path: Path
+    graph_env: dict[str, str], start_peer: StartPeer, tmp_path: Path
 ) -> None:
     # names of this test only: another test run may share the DDS domain on a busy machine
     ns, topic = f"/gp{os.getpid()}", f"/chatter{os.getpid()}"
-    start_peer("--name", "talker", "--namespace", ns, "--talk", topic, "--service", f"{ns}/enable")
-    start_peer("--name", "listener", "--namespace", ns + "_l", "--listen", topic)
+    start_peer.together(
+        ["--name", "talker", "--namespace", ns, "--talk", topic, "--service", f"{ns}/enable"],
+        ["--name", "listener", "--namespace", ns + "_l", "--listen", topic],
+    )
     talker, listener = f"{ns}/talker", f"{ns}_l/listener"
 
     def connected() -> bool:
@@ -325,7 +327,7 @@ def test_topic_plot_live_ros1(debian_master: dict[str, str], tmp_path: Path) -> 
     env = debian_master
     counter = start_rospy_script(FAST_PUBLISHER, env, tmp_path, "counter", ["20"])
     try:
-        assert wait_until(lambda: "/fast" in rostool(["topic", "list"], env).stdout.split(), 20)
+        assert wait_until(lambda: "/fast" in master_names(env["ROS_MASTER_URI"])["topics"], 20)
         piped = rostool(["topic", "plot", "/fast/data", "--duration", "5"], env)
         values = [v for _t, v in csv_series(piped.stdout)["/fast/data"]]
         assert len(values) >= 20 and values == [values[0] + i for i in range(len(values))], piped.stdout

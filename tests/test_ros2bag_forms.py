@@ -17,6 +17,7 @@ from typing import Any
 import pytest
 import yaml
 
+from tests.ros2_peers import StartPeer
 from tests.support import TESTDATA, Watched, rostool, rostool_popen, stop, wait_until
 from tests.test_ros2_graph import ros2_env
 
@@ -312,12 +313,13 @@ def test_bag_without_definitions_decodes_with_a_sourced_ros2(tmp_path: Path) -> 
 
 
 def test_record_filters_types_exclusions_regex_and_custom_data(
-    start_peer: Peer, graph_env: dict[str, str], tmp_path: Path
+    start_peer: StartPeer, graph_env: dict[str, str], tmp_path: Path
 ) -> None:
     """ros2bag test_recorder_args_parser's lists, recorded for real: --topic-types T, --custom-data K=V K=V,
     -a --exclude-topics T, -e RE (a name containing RE)."""
-    talker = start_peer("--talk", "/chatter", "--rate", "20")
-    stamped = start_peer("--stamped", "/point", "--rate", "20")
+    talker, stamped = start_peer.together(
+        ["--talk", "/chatter", "--rate", "20"], ["--stamped", "/point", "--rate", "20"]
+    )
     typed = [
         "--topic-types",
         "std_msgs/msg/String",
