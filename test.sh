@@ -75,13 +75,14 @@ fi
 # ./.venv: rostool (editable) with its test extras, 1.3 GB of wheels that take pip 80-90 s to install. A
 # copy of a current one is kept beside the peers (test-venv, stamped with pyproject.toml): a fresh clone
 # copies it (~6 s), then pip points its editable rostool at the clone (~4 s, every dependency present).
-# Scripts in the copy's bin/ keep the first venv's #! line: test.sh runs each tool as `.venv/bin/python -m`.
+# The copy's console scripts (ray, moto_server: tests run them) get this venv's python on their #! line.
 test_venv="$ROSTOOL_PEERS_DIR/../test-venv"
 deps_stamp() { echo "$(python3 --version) $(md5sum pyproject.toml)"; }  # what the test venv holds
 if [ ! -x .venv/bin/python ]; then
   if [ "$(cat "$test_venv/.deps" 2>/dev/null)" = "$(deps_stamp)" ]; then
     echo "test.sh: copying the test venv from $test_venv"
     cp -a "$test_venv" .venv
+    grep -lIs '^#!.*/bin/python' .venv/bin/* | xargs -r sed -i "1s|^#!.*/bin/python[0-9.]*\$|#!$PWD/.venv/bin/python|" || true
   else
     python3 -m venv .venv
   fi
