@@ -320,23 +320,25 @@ class GraphCache:
     def _drop_prompt(self) -> None:
         if self._prompt is not None:
             prompt, self._prompt = self._prompt, None
-            if self._take_info(prompt):
+            if self._take_info(prompt, newcomers_only=True):
                 self.nodes_changed = time.monotonic()
             prompt.__del__()  # cyclonedds deletes an entity only this way (or with its participant)
 
     def _poll_info(self) -> bool:
-        changed = False
-        for reader in (self.info_reader, self._prompt):
-            if reader is not None:
-                changed |= self._take_info(reader)
+        changed = self.info_reader is not None and self._take_info(self.info_reader)
+        if self._prompt is not None:
+            changed |= self._take_info(self._prompt, newcomers_only=True)
         return changed
 
-    def _take_info(self, reader: Any) -> bool:
+    def _take_info(self, reader: Any, newcomers_only: bool = False) -> bool:
+        """Fold in a ros_discovery_info reader's samples; `newcomers_only` (a prompt reader's): only for
+        participants not named yet, the first reader has the later samples of the others, in order."""
         from cyclonedds._clayer import ddspy_take  # type: ignore[import-not-found]
         from cyclonedds.core import InstanceState, SampleState, ViewState
 
         mask = SampleState.Any | ViewState.Any | InstanceState.Any
         changed = False
+        named = set(self.nodes) if newcomers_only else set()
         while True:
             samples = ddspy_take(reader._ref, mask, 64)
             if isinstance(samples, int) or not samples:
@@ -348,8 +350,10 @@ class GraphCache:
                     participant, nodes = decode_entities_info(data)
                 except ValueError:
                     continue
-                if participant != self.own and self.nodes.get(participant) != nodes:
-                    self.nodes[participant] = nodes  # a prompt reader brings the samples already known too
+                if participant == self.own or participant in named:
+                    continue
+                if self.nodes.get(participant) != nodes:
+                    self.nodes[participant] = nodes
                     changed = True
 
     @staticmethod
