@@ -255,3 +255,50 @@ def test_a_bag_of_messages_decoded_one_by_one_cut_in_pieces_exports_the_same_tab
     assert [row[0]["header"]["stamp"]["sec"] for row in joined.column("transforms").to_pylist()] == [
         msg.transforms[0].header.stamp.sec for msg in decoded
     ]
+
+
+def test_a_bag_is_cut_by_its_work_not_its_bytes(tmp_path: Path) -> None:
+    """Cheap Imu messages fill the first half of the file and costly TFMessage the second: pieces of equal
+    bytes would give one worker nearly all the work, so chunks are weighed by their messages (counted from
+    their message indexes) at export_cost's rates. The tables still equal one export's."""
+    from rostool.bag.mcap_batches import ChunkPlan
+    from rostool.bag.mcap_batches import plan as chunk_plan
+
+    bag = tmp_path / "uneven.mcap"
+    imu_bag, tf_bag = _bag(tmp_path / "imu.mcap", count=3000), _tf_bag(tmp_path / "tf.mcap", 3000)
+    with bag.open("wb") as stream:  # the Imu bag's messages, then the TF bag's, in chunks of 16 KiB
+        writer = Writer(stream, chunk_size=16 * 1024, compression=CompressionType.ZSTD)
+        writer.start("ros2", "rostool-test")
+        ids: dict[tuple[Path, int], int] = {}
+        for source, offset in ((imu_bag, 0), (tf_bag, 10_000_000_000)):
+            with source.open("rb") as handle:
+                for schema, channel, message in make_reader(handle).iter_messages():
+                    if (source, channel.id) not in ids:
+                        schema_id = writer.register_schema(schema.name, schema.encoding, schema.data)
+                        ids[source, channel.id] = writer.register_channel(channel.topic, "cdr", schema_id)
+                    when = message.log_time + offset
+                    writer.add_message(ids[source, channel.id], when, message.data, when, message.sequence)
+        writer.finish()
+    with bag.open("rb") as handle:
+        summary = make_reader(handle).get_summary()
+    assert summary is not None and summary.statistics is not None
+    wanted = {(channel.topic, summary.schemas[channel.schema_id].name): channel.topic
+              for channel in summary.channels.values()}  # fmt: skip
+    chunks = chunk_plan([bag], wanted)
+    assert chunks is not None and len(chunks.weights) == len(chunks.chunks) > 20
+    first, second = chunks.share(0, 2), chunks.share(1, 2)
+    assert first.chunks + second.chunks == chunks.chunks
+    heaviest = max(chunks.weights)
+    assert abs(sum(first.weights) - sum(second.weights)) <= heaviest  # equal work, to one chunk
+    by_bytes = ChunkPlan(chunks.chunks, chunks.channels).share(0, 2)  # what equal bytes would have given
+    assert sum(chunks.weights[: len(by_bytes.chunks)]) < sum(chunks.weights) / 3
+    # the counts read off the message indexes are the writer's own statistics
+    tf_channel = next(c.id for c in summary.channels.values() if c.topic == "/tf")
+    tf_seconds = summary.statistics.channel_message_counts[tf_channel] * export_cost.NESTED_MESSAGE
+    assert tf_seconds < sum(chunks.weights) < tf_seconds * 1.2
+    whole = _export([bag], tmp_path / "whole", jobs=1, piece_bytes=1)
+    cut = _export([bag], tmp_path / "cut", jobs=2, piece_bytes=1)
+    assert whole == cut == 3000 + 1000 + 3000
+    for table in ("imu", "chatter", "tf"):
+        one, joined = (pq.read_table(tmp_path / where / f"{table}.parquet") for where in ("whole", "cut"))
+        assert one.equals(joined), table

@@ -19,6 +19,7 @@ from typing import Any, BinaryIO
 
 import numpy as np
 
+from rostool.bag import export_cost
 from rostool.bag.bounded import inflate
 from rostool.errors import RostoolError
 
@@ -27,6 +28,7 @@ _CHUNK = 0x06
 _RECORD = struct.Struct("<BQ")
 _MESSAGE_HEAD = struct.Struct("<HIQQ")  # channel id, sequence, log time, publish time
 _CHUNK_HEAD = struct.Struct("<QQQI")  # start time, end time, uncompressed size, uncompressed crc
+_MESSAGE_INDEX_HEAD = 1 + 8 + 2 + 4  # a MessageIndex record's opcode, length, channel id, records' length
 
 
 @dataclass
@@ -47,21 +49,31 @@ class ChunkPlan:
 
     chunks: tuple[tuple[Path, int, int], ...]  # (file, offset, length) of each Chunk record
     channels: dict[Path, dict[int, Any]]
+    # each chunk's estimated export seconds (export_cost's rates, its wanted messages counted from its
+    # message indexes); empty when a file has none: chunks are then weighed by their bytes
+    weights: tuple[float, ...] = ()
 
     def share(self, piece: int, pieces: int) -> ChunkPlan:
-        """The `piece`-th of `pieces` consecutive runs of chunks of about equal bytes (some may be empty)."""
-        total = sum(length for _path, _offset, length in self.chunks)
+        """The `piece`-th of `pieces` consecutive runs of chunks of about equal work (some may be empty).
+        Work, not bytes: a bag whose costly topic (TFMessage, decoded one by one) crowds one part of the
+        file would give one piece most of it."""
+        weights = (
+            self.weights
+            if len(self.weights) == len(self.chunks)
+            else tuple(float(length) for _path, _offset, length in self.chunks)
+        )
+        total = sum(weights)
         start = end = 0
-        done = 0
-        for index, (_path, _offset, length) in enumerate(self.chunks):
-            # a chunk belongs to the piece its middle byte falls in
-            owner = min(pieces - 1, (done + length // 2) * pieces // total) if total else 0
-            done += length
+        done = 0.0
+        for index, weight in enumerate(weights):
+            # a chunk belongs to the piece its middle falls in
+            owner = min(pieces - 1, int((done + weight / 2) * pieces / total)) if total else 0
+            done += weight
             if owner < piece:
                 start = index + 1
             if owner <= piece:
                 end = index + 1
-        return ChunkPlan(self.chunks[start:end], self.channels)
+        return ChunkPlan(self.chunks[start:end], self.channels, weights[start:end])
 
 
 def plan(paths: Sequence[Path], wanted: Mapping[tuple[str, str], Any]) -> ChunkPlan | None:
@@ -73,6 +85,7 @@ def plan(paths: Sequence[Path], wanted: Mapping[tuple[str, str], Any]) -> ChunkP
 
     chunks: list[tuple[Path, int, int]] = []
     channels: dict[Path, dict[int, Any]] = {}
+    weights: list[float] | None = []
     last_end = -1
     for path in paths:
         try:
@@ -83,17 +96,41 @@ def plan(paths: Sequence[Path], wanted: Mapping[tuple[str, str], Any]) -> ChunkP
         if summary is None or not summary.chunk_indexes:
             return None
         channels[path] = {}
+        per_message: dict[int, float] = {}
         for channel in summary.channels.values():
             schema = summary.schemas.get(channel.schema_id)
             target = wanted.get((channel.topic, schema.name if schema else ""))
             if target is not None:
                 channels[path][channel.id] = target
+                flat = schema is not None and export_cost.is_flat(schema.encoding, schema.data)
+                per_message[channel.id] = export_cost.FLAT_MESSAGE if flat else export_cost.NESTED_MESSAGE
         for index in sorted(summary.chunk_indexes, key=lambda index: index.chunk_start_offset):
             if index.message_start_time < last_end or index.compression not in ("", "zstd", "lz4"):
                 return None
             last_end = index.message_end_time
             chunks.append((path, index.chunk_start_offset, index.chunk_length))
-    return ChunkPlan(tuple(chunks), channels)
+            counts = _indexed_counts(index)
+            if weights is not None and counts is not None:
+                messages = sum(count * per_message.get(channel, 0.0) for channel, count in counts.items())
+                weights.append(messages + index.uncompressed_size * export_cost.BYTE)
+            else:
+                weights = None
+    return ChunkPlan(tuple(chunks), channels, tuple(weights or ()))
+
+
+def _indexed_counts(index: Any) -> dict[int, int] | None:
+    """Each channel's message count in a chunk, from the sizes of its MessageIndex records (which follow
+    the chunk, one per channel: opcode, length, channel id, records length, 16 bytes a message), without
+    reading them; None for a chunk written without message indexes."""
+    offsets = sorted(index.message_index_offsets.items(), key=lambda pair: pair[1])
+    if not offsets or not index.message_index_length:
+        return None
+    first = offsets[0][1]
+    ends = [offset for _channel, offset in offsets[1:]] + [first + index.message_index_length]
+    return {
+        channel: max(0, (end - offset - _MESSAGE_INDEX_HEAD) // 16)
+        for (channel, offset), end in zip(offsets, ends, strict=True)
+    }
 
 
 def batches(chunk_plan: ChunkPlan) -> Iterator[tuple[Any, ChannelBatch]]:
