@@ -98,11 +98,17 @@ def test_ctrl_c_while_starting_is_quiet(moment: float, tmp_path: Path) -> None:
     rostool = Path(sys.executable).with_name("rostool")
     process = subprocess.Popen(
         [str(rostool), "--ros2", "--ros2-backend", "dds", "bag", "record", "/nothing", "-O", "x.mcap"],
-        cwd=tmp_path, env=ros2_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        cwd=tmp_path, env={**ros2_env(), "PYTHONFAULTHANDLER": "1"},  # a hang dumps its threads on SIGABRT
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
     )  # fmt: skip
     time.sleep(moment)
     process.send_signal(signal.SIGINT)
-    _out, err = process.communicate(timeout=30)
+    try:
+        _out, err = process.communicate(timeout=30)
+    except subprocess.TimeoutExpired:  # seen under load: say where it hung
+        process.send_signal(signal.SIGABRT)
+        _out, err = process.communicate(timeout=30)
+        pytest.fail(f"still running 30 s after SIGINT at {moment} s; its threads:\n{err[-4000:]}")
     # Before any rostool code runs: the signal came before Python installed its handler (the process dies
     # of it: rostool never restores SIGINT's default), or during one of Python's own init stages (its fatal
     # error names them: init_import_site, init_sys_streams, ...)

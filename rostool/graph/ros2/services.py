@@ -221,19 +221,25 @@ class ServiceServer:
 
     def _serve(self) -> None:
         from cyclonedds._clayer import ddspy_take, ddspy_write  # type: ignore[import-not-found]
+        from cyclonedds.core import DDSException
         from cyclonedds.util import duration
 
         while not self._closed.is_set():
-            self._waitset.wait(duration(milliseconds=250))
-            samples = ddspy_take(self._reader._ref, _ANY_SAMPLE, 64)
-            for data, info in [] if isinstance(samples, int) else samples:
-                if not info.valid_data:
-                    continue
-                guid, seq, cdr = _split(data)
-                response = self._handler(self._types.deserialize(cdr, self.request_type))
-                reply = _join(guid, seq, self._types.serialize(response, self.response_type))
-                self._wait_for_reply_readers()
-                ddspy_write(self._writer._ref, reply)
+            try:
+                self._waitset.wait(duration(milliseconds=250))
+                samples = ddspy_take(self._reader._ref, _ANY_SAMPLE, 64)
+                for data, info in [] if isinstance(samples, int) else samples:
+                    if not info.valid_data:
+                        continue
+                    guid, seq, cdr = _split(data)
+                    response = self._handler(self._types.deserialize(cdr, self.request_type))
+                    reply = _join(guid, seq, self._types.serialize(response, self.response_type))
+                    self._wait_for_reply_readers()
+                    ddspy_write(self._writer._ref, reply)
+            except DDSException:
+                # its entities were deleted under it: the participant closed before `close` was called (a
+                # Ctrl+C between the server's start and its registration) or before its join ended
+                return
 
     def _wait_for_reply_readers(self, timeout: float = REPLY_MATCH_WAIT) -> None:
         """Discovery matches each direction on its own: a client may see us (and send a request) before our
