@@ -33,6 +33,7 @@ import time
 from pathlib import Path
 
 from _graph import VENV_PYTHON, ros2_env
+from bench_daemon_rss import slope_mib_per_min
 from soak_daemon import ALIVE, CHURNER, DISTRO, rss_kib
 
 from tests.ros2_peers import PEERS_DIR, RclpyPeer, peer_env
@@ -101,17 +102,6 @@ while True:
         last_report = now
     time.sleep(0.25)
 """
-
-
-def slope_mib_per_min(rows: list[tuple[float, int]]) -> float:
-    late = [(t, kib / 1024) for t, kib in rows if t >= WARMUP]
-    if len(late) < 2:
-        return float("nan")
-    mean_t = sum(t for t, _ in late) / len(late)
-    mean_r = sum(r for _, r in late) / len(late)
-    num = sum((t - mean_t) * (r - mean_r) for t, r in late)
-    den = sum((t - mean_t) ** 2 for t, _ in late)
-    return num / den * 60
 
 
 def main() -> None:

@@ -27,27 +27,12 @@ from pathlib import Path
 
 from _graph import VENV_PYTHON, ros2_env
 
-from tests.ros2_peers import PEERS_DIR, RclpyPeer, peer_env
+from tests.ros2_peers import BRIEF_NODE, PEERS_DIR, RclpyPeer, peer_env
 
 DISTRO = "jazzy"
 ROS2 = str(PEERS_DIR / DISTRO / "bin" / "ros2")
 LIMIT = 30.0
 BRIEF_LIFE = 2.5
-BRIEF_NODE = r"""
-import sys, time
-import rclpy
-from std_msgs.msg import String
-name, life = sys.argv[1], float(sys.argv[2])
-context = rclpy.Context()
-rclpy.init(context=context)
-born = time.monotonic()
-node = rclpy.create_node(name, context=context)
-node.create_publisher(String, "/" + name, 10)
-print("up", flush=True)
-time.sleep(max(0.0, life - (time.monotonic() - born)))
-node.destroy_node()
-rclpy.shutdown(context=context)
-"""
 
 
 def names(command: list[str], env: dict[str, str], verb: str) -> set[str]:

@@ -73,6 +73,25 @@ def peer_python(distro: str) -> Path:
     return python
 
 
+# An rclpy node (a publisher on /NAME) that lives LIFE seconds from its context's start, then leaves cleanly:
+# `python -c BRIEF_NODE NAME LIFE`; it prints "up" once its node exists
+BRIEF_NODE = r"""
+import sys, time
+import rclpy
+from std_msgs.msg import String
+name, life = sys.argv[1], float(sys.argv[2])
+context = rclpy.Context()
+rclpy.init(context=context)
+born = time.monotonic()
+node = rclpy.create_node(name, context=context)
+node.create_publisher(String, "/" + name, 10)
+print("up", flush=True)
+time.sleep(max(0.0, life - (time.monotonic() - born)))
+node.destroy_node()
+rclpy.shutdown(context=context)
+"""
+
+
 def fastdds_profile(lease: float | None = None) -> str:
     """The peers' loopback-only profile; `lease`: the participant's lease in seconds (Fast DDS's default
     is 20 s, announced every 3 s), announced 4 times per lease."""

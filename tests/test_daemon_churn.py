@@ -16,7 +16,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from tests.ros2_peers import RclpyPeer, WarmDaemon, peer_env, peer_python, serving
+from tests.ros2_peers import BRIEF_NODE, RclpyPeer, WarmDaemon, peer_env, peer_python, serving
 from tests.support import rostool, wait_until
 
 # Each brief node lives LIFE seconds from its context's start: longer than the daemon needs to learn its
@@ -24,21 +24,6 @@ from tests.support import rostool, wait_until
 # which was the only way its name came before.
 LIFE = 2.5
 BRIEF = 4
-BRIEF_NODE = r"""
-import sys, time
-import rclpy
-from std_msgs.msg import String
-name, life = sys.argv[1], float(sys.argv[2])
-context = rclpy.Context()
-rclpy.init(context=context)
-born = time.monotonic()
-node = rclpy.create_node(name, context=context)
-node.create_publisher(String, "/" + name, 10)
-print("up", flush=True)
-time.sleep(max(0.0, life - (time.monotonic() - born)))  # its life is what the test is about
-node.destroy_node()
-rclpy.shutdown(context=context)
-"""
 
 
 def _ask(daemon: WarmDaemon, method: str) -> Any:
