@@ -34,9 +34,7 @@ from pathlib import Path
 
 from _graph import VENV_PYTHON, ros2_env
 from bench_daemon_rss import slope_mib_per_min
-from soak_daemon import ALIVE, CHURNER, DISTRO, rss_kib
-
-from tests.ros2_peers import PEERS_DIR, RclpyPeer, peer_env
+from soak_daemon import churning, rss_kib
 
 SAMPLE = 10.0
 WARMUP = 120.0
@@ -113,11 +111,9 @@ def main() -> None:
     variants = [v for v in args.variants.split(",") if v]
     scratch = Path(tempfile.mkdtemp(prefix="rtp"))
     env = {**ros2_env(), "MALLOC_ARENA_MAX": "2"}
-    fast = peer_env(env, scratch)
     print(f"load average at start: {os.getloadavg()[0]:.1f}", flush=True)
     watchers: dict[str, subprocess.Popen[str]] = {}
     rows: dict[str, list[tuple[float, int]]] = {v: [] for v in variants}
-    steady = churner = None
     try:
         for variant in variants:
             script = scratch / "watcher.py"  # a file, not -c: wrappers such as heaptrack re-quote arguments
@@ -130,22 +126,17 @@ def main() -> None:
                 pass  # a wrapper's own lines
             if not line:
                 sys.exit(f"{variant} did not start")
-        steady = RclpyPeer(DISTRO, env, scratch, ["--name", "steady", "--talk", "/steady"])
-        steady.wait_for("ready", timeout=60)
-        churner = subprocess.Popen(
-            [str(PEERS_DIR / DISTRO / "bin" / "python"), "-c", CHURNER, "1.0", str(ALIVE)],
-            env=fast, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-        )  # fmt: skip
-        start = time.monotonic()
-        print("| s | " + " | ".join(variants) + " |", flush=True)
-        while time.monotonic() - start < args.minutes * 60:
-            time.sleep(SAMPLE)
-            now = time.monotonic() - start
-            for variant, proc in watchers.items():
-                rows[variant].append((now, rss_kib(proc.pid)))
-            if len(rows[variants[0]]) % 3 == 0:
-                cells = " | ".join(f"{rows[v][-1][1] / 1024:.2f}" for v in variants)
-                print(f"| {now:.0f} | {cells} | load {os.getloadavg()[0]:.1f}", flush=True)
+        with churning(env, scratch):
+            start = time.monotonic()
+            print("| s | " + " | ".join(variants) + " |", flush=True)
+            while time.monotonic() - start < args.minutes * 60:
+                time.sleep(SAMPLE)
+                now = time.monotonic() - start
+                for variant, proc in watchers.items():
+                    rows[variant].append((now, rss_kib(proc.pid)))
+                if len(rows[variants[0]]) % 3 == 0:
+                    cells = " | ".join(f"{rows[v][-1][1] / 1024:.2f}" for v in variants)
+                    print(f"| {now:.0f} | {cells} | load {os.getloadavg()[0]:.1f}", flush=True)
         for proc in watchers.values():
             proc.terminate()
         print(f"\n| variant | RSS at {WARMUP:.0f} s | last | slope after {WARMUP:.0f} s (MiB/min) | malloc "
@@ -167,14 +158,6 @@ def main() -> None:
                   f"{heap_last[1] / 1024:.2f} MiB, {slope_mib_per_min(heap):+.3f} | {named} / {seen} | "
                   f"{median}, {worst} |")  # fmt: skip
     finally:
-        if churner is not None:
-            churner.terminate()
-            try:
-                churner.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                churner.kill()
-        if steady is not None:
-            steady.stop()
         for proc in watchers.values():
             proc.terminate()
             proc.wait(timeout=10)

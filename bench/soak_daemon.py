@@ -15,12 +15,14 @@ count would be a node the daemon keeps after it left (stale), printed at the end
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import shutil
 import subprocess
 import tempfile
 import time
+from collections.abc import Iterator
 from pathlib import Path
 
 from _graph import VENV_PYTHON, ros2_env
@@ -74,6 +76,53 @@ def rss_kib(pid: int) -> int:
     return 0
 
 
+@contextlib.contextmanager
+def churning(env: dict[str, str], scratch: Path) -> Iterator[None]:
+    """The steady node and the churner (see the module's docstring) running; both stopped at the end."""
+    steady = RclpyPeer(DISTRO, env, scratch, ["--name", "steady", "--talk", "/steady"])
+    try:
+        steady.wait_for("ready", timeout=60)
+        churner = subprocess.Popen(
+            [str(PEERS_DIR / DISTRO / "bin" / "python"), "-c", CHURNER, "1.0", str(ALIVE)],
+            env=peer_env(env, scratch), stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+        )  # fmt: skip
+        try:
+            yield
+        finally:
+            churner.terminate()  # rclpy keeps SIGINT for its contexts
+            try:
+                churner.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                churner.kill()
+                churner.wait()
+    finally:
+        steady.stop()
+
+
+def _sample(
+    command: list[str], tool_env: dict[str, str], minutes: float, samples: list[tuple[float, int, int]],
+    pids: set[int],
+) -> None:
+    """The daemon's RSS and node count every SAMPLE seconds for `minutes`."""
+    start = time.monotonic()
+    while time.monotonic() - start < minutes * 60:
+        time.sleep(SAMPLE)
+        done = subprocess.run(
+            [*command, "daemon", "status", "--json"], env=tool_env, capture_output=True, text=True,
+            timeout=60,
+        )  # fmt: skip
+        status = json.loads(done.stdout)
+        if not status.get("running"):
+            print(f"  {time.monotonic() - start:6.0f} s: the daemon is not running")
+            continue
+        pid = int(status["pid"])
+        pids.add(pid)
+        nodes = int(status["graph"]["nodes"])
+        samples.append((time.monotonic() - start, rss_kib(pid), nodes))
+        if len(samples) % 12 == 0:
+            print(f"  {samples[-1][0]:6.0f} s: RSS {samples[-1][1] / 1024:.1f} MiB, {nodes} nodes")
+
+
 def soak(backend: str, minutes: float, env: dict[str, str], scratch: Path) -> None:
     fast = peer_env(env, scratch)
     if backend == "dds":
@@ -82,40 +131,12 @@ def soak(backend: str, minutes: float, env: dict[str, str], scratch: Path) -> No
         python = str(PEERS_DIR / DISTRO / "bin" / "python")
         command, tool_env = [python, "-m", "rostool", "--ros2-backend", "rclpy"], fast
     subprocess.run([*command, "daemon", "start"], env=tool_env, check=True, capture_output=True, timeout=60)
-    steady = RclpyPeer(DISTRO, env, scratch, ["--name", "steady", "--talk", "/steady"])
-    steady.wait_for("ready", timeout=60)
-    churner = subprocess.Popen(
-        [str(PEERS_DIR / DISTRO / "bin" / "python"), "-c", CHURNER, "1.0", str(ALIVE)],
-        env=fast, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-    )  # fmt: skip
     samples: list[tuple[float, int, int]] = []  # (seconds, RSS KiB, nodes)
     pids: set[int] = set()
-    start = time.monotonic()
     try:
-        while time.monotonic() - start < minutes * 60:
-            time.sleep(SAMPLE)
-            done = subprocess.run(
-                [*command, "daemon", "status", "--json"], env=tool_env, capture_output=True, text=True,
-                timeout=60,
-            )  # fmt: skip
-            status = json.loads(done.stdout)
-            if not status.get("running"):
-                print(f"  {time.monotonic() - start:6.0f} s: the daemon is not running")
-                continue
-            pid = int(status["pid"])
-            pids.add(pid)
-            nodes = int(status["graph"]["nodes"])
-            samples.append((time.monotonic() - start, rss_kib(pid), nodes))
-            if len(samples) % 12 == 0:
-                print(f"  {samples[-1][0]:6.0f} s: RSS {samples[-1][1] / 1024:.1f} MiB, {nodes} nodes")
+        with churning(env, scratch):
+            _sample(command, tool_env, minutes, samples, pids)
     finally:
-        churner.terminate()  # rclpy keeps SIGINT for its contexts
-        try:
-            churner.wait(timeout=10)
-        except subprocess.TimeoutExpired:
-            churner.kill()
-            churner.wait()
-        steady.stop()
         subprocess.run([*command, "daemon", "stop"], env=tool_env, capture_output=True, timeout=60)
     counted = [s for s in samples if s[0] >= WARMUP]
     first, last = counted[0], counted[-1]

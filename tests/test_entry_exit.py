@@ -12,28 +12,15 @@ import pytest
 
 from rostool._entry import _exit_code
 from tests.support import ros2_env, rostool
+from tests.test_issue25_services import write_strings_bag
 
 COUNT = 5000  # lines well past a pipe's and Python's buffers
-T0 = 1_700_000_000 * 1_000_000_000
-
-
-def write_strings_mcap(path: Path, count: int) -> None:
-    """A rosbag2 .mcap of std_msgs/String 'n N' on /chatter (rosbags' writer)."""
-    from rosbags.rosbag2 import StoragePlugin, Writer
-    from rosbags.typesys import Stores, get_typestore
-
-    store = get_typestore(Stores.ROS2_JAZZY)
-    string = store.types["std_msgs/msg/String"]
-    with Writer(path, version=9, storage_plugin=StoragePlugin.MCAP) as writer:
-        conn = writer.add_connection("/chatter", "std_msgs/msg/String", typestore=store)
-        for n in range(count):
-            writer.write(conn, T0 + n * 1_000_000, store.serialize_cdr(string(data=f"n {n}"), conn.msgtype))
 
 
 @pytest.fixture(scope="module")
 def bag(tmp_path_factory: pytest.TempPathFactory) -> Path:
     path = tmp_path_factory.mktemp("exit") / "strings"
-    write_strings_mcap(path, COUNT)
+    write_strings_bag(path, COUNT)
     return path
 
 
