@@ -302,3 +302,20 @@ def test_a_bag_is_cut_by_its_work_not_its_bytes(tmp_path: Path) -> None:
     for table in ("imu", "chatter", "tf"):
         one, joined = (pq.read_table(tmp_path / where / f"{table}.parquet") for where in ("whole", "cut"))
         assert one.equals(joined), table
+
+
+@pytest.mark.parametrize("content", [b"garbage", b"\x89MCAP0\r\n", b"\x89MCAP0\r\n" + b"\x01" * 40])
+def test_a_damaged_mcap_is_one_line_not_an_internal_error(tmp_path: Path, content: bytes) -> None:
+    """The cost estimate reads the summary of every .mcap before the export: a file too short for even the
+    magic (the mcap library's struct.error) must leave the error to the export's own one line."""
+    from tests.support import ros2_env, rostool
+
+    bag = tmp_path / "damaged.mcap"
+    bag.write_bytes(content)
+    assert export_cost.seconds(bag) >= 0.0
+    for jobs in ("1", "2"):
+        out = tmp_path / f"out{jobs}"
+        done = rostool(["bag", "export", str(bag), "-o", str(out), "-j", jobs], ros2_env())
+        assert done.returncode == 1, (done.returncode, done.stderr)
+        lines = done.stderr.strip().splitlines()
+        assert len(lines) == 1 and "damaged.mcap" in lines[0] and "internal error" not in lines[0], lines

@@ -13,6 +13,7 @@ bytes at the rate that made 64 MiB worth a second worker before (`many.PARALLEL_
 
 from __future__ import annotations
 
+import struct
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -67,7 +68,7 @@ def _mcap_seconds(file: Path, topics: set[str]) -> float | None:
     try:
         with file.open("rb") as handle:
             summary = make_reader(handle).get_summary()
-    except (McapError, OSError, ValueError, KeyError):
+    except (McapError, OSError, ValueError, KeyError, struct.error):  # damaged: the export itself says so
         return None
     if summary is None or summary.statistics is None or not summary.chunk_indexes:
         return None
