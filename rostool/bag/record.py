@@ -14,16 +14,13 @@ rosbags under the directory `NAME.active/` and moved into place when closed; aft
 from __future__ import annotations
 
 import collections
-import contextlib
 import re
-import signal
 import sqlite3
 import struct
 import threading
 import time
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
-from types import FrameType
 from typing import Any, cast
 
 from rostool.bag.formats import FORMATS
@@ -413,6 +410,10 @@ class Recorder:
         options = self.options
         self._stop = stop
         # The writer thread owns the files from opening to closing (sqlite connections are per thread).
+        # Its modules are imported here first: an import it shared with this thread could wait on a module
+        # lock that an interrupted import here left held.
+        if self.fmt != "bag" or options.rosbag2 is not None:
+            import rosbags.rosbag2  # noqa: F401
         writer = threading.Thread(target=self._writer_main, name="bag-writer", daemon=True)
         writer.start()
         self._opened.wait()
@@ -514,24 +515,3 @@ def _compile(pattern: str) -> re.Pattern[str]:
         return re.compile(pattern)
     except re.error as err:
         raise RostoolError(f"bad regular expression {pattern!r}: {err}") from err
-
-
-@contextlib.contextmanager
-def stop_on_signals(stop: threading.Event) -> Iterator[None]:
-    """SIGINT, SIGTERM and SIGHUP (terminal closed) set `stop`, so the recording ends cleanly; a second
-    signal aborts at once (the .active file is then left for `bag reindex`)."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-
-    def handler(signum: int, _frame: FrameType | None) -> None:
-        if stop.is_set():
-            raise KeyboardInterrupt
-        stop.set()
-
-    previous = {sig: signal.signal(sig, handler) for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)}
-    try:
-        yield
-    finally:
-        for sig, old in previous.items():
-            signal.signal(sig, old)

@@ -40,8 +40,19 @@ class RecordRequest:
 
 
 def run_record(ctx: click.Context, request: RecordRequest) -> None:
+    from rostool.bag.record_signals import stop_on_signals
+
+    stop = threading.Event()
+    # Ctrl+C sets `stop` from here on, while the recorder's modules import and the graph opens too: raised
+    # there, a KeyboardInterrupt could land inside an import (leaving its module lock held for the writer
+    # thread) or surface wrapped (a RuntimeError from `__set_name__`) where an `except Exception` takes it.
+    with stop_on_signals(stop):
+        _record(ctx, request, stop)
+
+
+def _record(ctx: click.Context, request: RecordRequest, stop: threading.Event) -> None:
     from rostool.bag.player_services import Served, serve_recorder
-    from rostool.bag.record import Recorder, stop_on_signals
+    from rostool.bag.record import Recorder
     from rostool.commands._common import live_graph
     from rostool.commands.bag._record_console import PlainProgress, RecordDashboard, pause_controls
 
@@ -52,7 +63,6 @@ def run_record(ctx: click.Context, request: RecordRequest) -> None:
             progress = RecordDashboard()
         elif request.progress_every > 0:
             progress = PlainProgress(request.progress_every)
-    stop = threading.Event()
     with live_graph(ctx, request.interface_paths) as graph:
         graph.use_qos(request.qos)
         options = dataclasses.replace(
@@ -101,11 +111,7 @@ def run_record(ctx: click.Context, request: RecordRequest) -> None:
                 lambda: recorder.split().wait(SNAPSHOT_WAIT),
                 warn if take is not None else lambda _text: None,  # said only where asked for (snapshots)
             )  # fmt: skip
-        with (
-            contextlib.closing(served),
-            stop_on_signals(stop),
-            pause_controls(toggle, request.keyboard, take) as keys,
-        ):
+        with contextlib.closing(served), pause_controls(toggle, request.keyboard, take) as keys:
             if not request.quiet and (keys or recorder.paused):
                 click.echo(_pause_hint(keys, recorder.paused, ros2_form), err=True)
             if not request.quiet and options.snapshot:
