@@ -7,6 +7,7 @@ from __future__ import annotations
 import signal
 import subprocess
 import sys
+import time
 from collections.abc import Callable
 from pathlib import Path
 from subprocess import PIPE, STDOUT
@@ -20,12 +21,18 @@ Start = Callable[..., RclpyPeer]
 
 def recorded_numbers(bag: Path) -> list[int]:
     """N of each "hello N" in the bag, read by rosbags (not by rostool)."""
+    return [number for _stamp, number in recorded(bag)]
+
+
+def recorded(bag: Path) -> list[tuple[int, int]]:
+    """Each message's log time (its receive time, ns since the epoch) and N of its "hello N", read by
+    rosbags."""
     from rosbags.highlevel import AnyReader
 
     with AnyReader([bag]) as reader:
         return [
-            int(reader.deserialize(data, conn.msgtype).data.removeprefix("hello "))
-            for conn, _t, data in reader.messages()
+            (stamp, int(reader.deserialize(data, conn.msgtype).data.removeprefix("hello ")))
+            for conn, stamp, data in reader.messages()
         ]
 
 
@@ -49,10 +56,10 @@ def test_record_start_paused_records_from_space_on(
         matched = talker.wait_for("matched", lambda e: e["subscribers"] >= 1, timeout=30)
         # messages up to `before` were published at least a second before SPACE: none may be recorded
         before = published_after(talker, int(matched["count"]) + 20)
-        published_after(talker, before)
+        resumed = published_after(talker, before + 20)
         term.send("Space")
         assert term.wait_for(lambda s: "[INFO] [rosbag2_recorder]: Resuming recording." in s), term.screen()
-        published_after(talker, published_after(talker, before) + 20)
+        published_after(talker, resumed + 20)
         term.send("C-c")
         assert term.wait_for(lambda s: "[exit 0]" in s, 30), term.screen()
     finally:
@@ -75,14 +82,31 @@ def test_record_pauses_and_resumes_on_sigusr1(
         first = published_after(talker, int(matched["count"]) + 10)
         recorder.proc.send_signal(signal.SIGUSR1)
         assert recorder.wait_for(lambda out: "Pausing recording." in out, 10), recorder.stdout
-        paused_at = published_after(talker, first)  # after the pause took effect (its line was printed)
+        # paused from here (the recorder prints the line once paused) to `resuming`: a message received in
+        # between (the bag's log time is its receive time, on this machine's clock) must not be recorded.
+        # Counts alone cannot bound it: a "published" event seen after the line may be of a message sent
+        # before the pause, and one sent before the resume may be received after it.
+        paused = time.time_ns()
+        paused_at = published_after(talker, max_published(talker))
         resumed_at = published_after(talker, paused_at + 20)  # a second of messages no one should record
+        resuming = time.time_ns()
         recorder.proc.send_signal(signal.SIGUSR1)
         assert recorder.wait_for(lambda out: "Resuming recording." in out, 10), recorder.stdout
         published_after(talker, resumed_at + 20)
     finally:
         recorder.stop()
-    numbers = recorded_numbers(bag)
-    gap = [n for n in range(paused_at + 1, resumed_at + 1) if n in numbers]
+    found = recorded(bag)
+    numbers = [number for _stamp, number in found]
+    gap = [(number, stamp - paused) for stamp, number in found if paused <= stamp <= resuming]
     assert not gap, gap
+    assert numbers == sorted(numbers), numbers
+    # and by counts: all but the edges of that second left out (a message of either edge may have been
+    # sent before the pause, or received after the resume)
+    missed = set(range(paused_at + 1, resumed_at + 1)) - set(numbers)
+    assert len(missed) >= resumed_at - paused_at - 4, (paused_at, resumed_at, numbers)
     assert any(n <= first for n in numbers) and any(n > resumed_at for n in numbers), numbers
+
+
+def max_published(peer: RclpyPeer) -> int:
+    """The talker's highest count reported so far."""
+    return max(int(e["count"]) for e in list(peer.events) if e["event"] == "published")
