@@ -59,6 +59,25 @@ def pytest_configure(config: pytest.Config) -> None:
     register(config)  # ROSTOOL_TEST_CPU=DIR: CPU seconds per test (tests/cpu_profile.py)
 
 
+# why each rerun test failed (its last lines): `-r R` names the reruns, and a rerun is a flake to fix
+RERUN_WHY: list[tuple[str, str]] = []
+RERUN_LINES = 15
+
+
+def pytest_runtest_logreport(report: pytest.TestReport) -> None:
+    if report.outcome == "rerun":  # pytest-rerunfailures' outcome; under xdist, reported in the controller
+        lines = report.longreprtext.splitlines()
+        errors = [line for line in lines if line.startswith("E ")][:RERUN_LINES] + lines[-1:]  # + where
+        RERUN_WHY.append((report.nodeid, "\n".join(errors if len(errors) > 1 else lines[-RERUN_LINES:])))
+
+
+def pytest_terminal_summary(terminalreporter: pytest.TerminalReporter) -> None:
+    if RERUN_WHY:
+        terminalreporter.section("why tests were rerun")
+        for nodeid, why in RERUN_WHY:
+            terminalreporter.write_line(f"{nodeid}:\n{why}\n")
+
+
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
     """Long modules first, `alone` tests last (they stop the other workers while they run); otherwise the
     order of the files. Every xdist worker sorts alike, so their collections stay identical."""
