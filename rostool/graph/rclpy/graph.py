@@ -62,6 +62,7 @@ class RclpyGraph(Ros2Base):
         self.spin_time: float | None = None  # --spin-time: a listing's discovery wait, as ros2cli's
         self._spin_deadline: float | None = None
         self._described: set[str] = set()  # the long-lived graph's nodes seen with endpoints
+        self._writers: list[RclpyWriter] = []
 
     @property
     def types(self) -> Ros2Types:  # type: ignore[override]
@@ -94,6 +95,7 @@ class RclpyGraph(Ros2Base):
 
     def _close_transport(self) -> None:
         if self._context is not None:
+            _lingered(self._writers, LINGER_SECONDS)
             self._context.close()
             self._context = None
 
@@ -318,7 +320,9 @@ class RclpyGraph(Ros2Base):
         from rostool.graph.rclpy.qos import to_rclpy
 
         cls = rtypes.python_class(store_name)
-        return RclpyWriter(self.node.create_publisher(cls, topic, to_rclpy(profile)))
+        writer = RclpyWriter(self.node.create_publisher(cls, topic, to_rclpy(profile)))
+        self._writers.append(writer)
+        return writer
 
     def store_name(self, type_name: str) -> str:
         """`pkg/Type` or `pkg/msg/Type` -> `pkg/msg/Type`, known to rosbags' store (from the class rclpy
@@ -372,3 +376,26 @@ class RclpyWriter:
 
     def matched(self) -> int:
         return int(self._writer.get_subscription_count())
+
+    def wait_acked(self, seconds: float) -> None:
+        """Until every reliable subscription acknowledged what was written, at most `seconds`."""
+        from rclpy.duration import Duration
+
+        with contextlib.suppress(Exception):  # a publisher rmw already tore down: nothing to wait for
+            self._writer.wait_for_all_acked(Duration(nanoseconds=int(seconds * 1e9)))
+
+
+# A closing process's writers linger until their reliable subscriptions acknowledged what they sent (at
+# most this long in all), as Cyclone's do (its WriterLingerDuration, 1 s), which rmw does not do for us: the
+# last messages of a `bag play` or `topic pub`, still to be resent to a subscription that matched this
+# writer late, were otherwise lost with the writer.
+LINGER_SECONDS = 1.0
+
+
+def _lingered(writers: list[RclpyWriter], seconds: float) -> None:
+    deadline = time.monotonic() + seconds
+    for writer in writers:
+        left = deadline - time.monotonic()
+        if left <= 0:
+            return
+        writer.wait_acked(left)
