@@ -53,7 +53,10 @@ from tests.parity_ros2cli import (
 )
 from tests.support import ros2_env, wait_until
 
-TALKER = ["--name", "parity_talker", "--talk", "/chatter", "--rate", "5", "--stamped", "/stamped"]
+# its texts keep one length ('hello 1000'...): two tools' echoes take different messages, and `--no-str`
+# prints the length (seen in CI: 'hello 99' and 'hello 100' taken by ros2 and rostool)
+TALKER = ["--name", "parity_talker", "--talk", "/chatter", "--first", "1000", "--rate", "5",
+          "--stamped", "/stamped"]  # fmt: skip
 HIDER = ["--name", "_parity_hider", "--talk", "/_parity_hidden", "--rate", "2"]  # a hidden node and topic
 SERVER = ["--name", "parity_server", "--params", "--service", "/set_flag", "--action", "/fibonacci",
           "--step", "0.05", "--listen", "/chatter", "--listen", "/parity_pub"]  # fmt: skip
