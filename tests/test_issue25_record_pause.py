@@ -87,7 +87,7 @@ def test_record_pauses_and_resumes_on_sigusr1(
         # Counts alone cannot bound it: a "published" event seen after the line may be of a message sent
         # before the pause, and one sent before the resume may be received after it.
         paused = time.time_ns()
-        paused_at = published_after(talker, max_published(talker))
+        paused_at = published_after(talker, max(int(e["count"]) for e in talker.of("published")))
         resumed_at = published_after(talker, paused_at + 20)  # a second of messages no one should record
         resuming = time.time_ns()
         recorder.proc.send_signal(signal.SIGUSR1)
@@ -105,8 +105,3 @@ def test_record_pauses_and_resumes_on_sigusr1(
     missed = set(range(paused_at + 1, resumed_at + 1)) - set(numbers)
     assert len(missed) >= resumed_at - paused_at - 4, (paused_at, resumed_at, numbers)
     assert any(n <= first for n in numbers) and any(n > resumed_at for n in numbers), numbers
-
-
-def max_published(peer: RclpyPeer) -> int:
-    """The talker's highest count reported so far."""
-    return max(int(e["count"]) for e in list(peer.events) if e["event"] == "published")
