@@ -1,8 +1,10 @@
 """The first call when no graph daemon runs yet (issue 21's cold call), against real rclpy peers: it answers
 completely and directly, and starts the daemon only once its answer is known (a daemon started before
-would be one more participant its listing waits for); the DDS graph's ros_discovery_info reader is made
-once the participants seen have described their endpoints (a Fast DDS peer then heartbeats its nodes to
-it at once; made before, the reader waits for the peer's next 3 s heartbeat)."""
+would be one more participant its listing waits for), except on the rclpy backend, whose direct listing
+waits a floor of seconds anyway: there the daemon starts beside it and serves sooner. The DDS graph's
+ros_discovery_info reader is made once the participants seen have described their endpoints (a Fast DDS
+peer then heartbeats its nodes to it at once; made before, the reader waits for the peer's next 3 s
+heartbeat)."""
 
 from __future__ import annotations
 
@@ -12,12 +14,14 @@ import shutil
 import subprocess
 import sys
 import tempfile
+import time
 from collections.abc import Callable, Iterator
+from pathlib import Path
 from typing import Any
 
 import pytest
 
-from tests.ros2_peers import RclpyPeer
+from tests.ros2_peers import RclpyPeer, rostool_rclpy, rostool_rclpy_popen
 from tests.support import rostool, wait_until
 
 
@@ -53,6 +57,36 @@ def test_a_cold_call_answers_completely_then_a_daemon_serves(
     assert wait_until(lambda: daemon_status(cold_env)["running"] is True, timeout=30)
     assert rostool(["node", "list"], cold_env).stdout.split() == expected  # now through the daemon
     assert daemon_status(cold_env)["graph"]["nodes"] == 3
+
+
+@pytest.mark.parametrize("distro", ["jazzy"])
+def test_a_cold_rclpy_call_starts_its_daemon_while_it_waits_for_discovery(
+    start_peer: Callable[..., RclpyPeer], cold_env: dict[str, str], tmp_path: Path, distro: str
+) -> None:
+    for i in range(2):
+        start_peer("--name", f"beside_{i}", "--talk", f"/beside_{i}")
+    logs = Path(cold_env["XDG_STATE_HOME"]) / "rostool"
+    call = rostool_rclpy_popen(["node", "list"], cold_env, tmp_path, distro)
+    started = time.monotonic()
+    spawned: float | None = None  # when the daemon's log (opened as it is spawned) appeared
+    while call.poll() is None and time.monotonic() - started < 30:
+        if spawned is None and any(logs.glob("rclpy-d*.log")):
+            spawned = time.monotonic()
+        time.sleep(0.02)
+    ended = time.monotonic()
+    out, _err = call.communicate(timeout=30)
+    assert call.returncode == 0
+    assert out.split() == ["/beside_0", "/beside_1"]  # complete, and no daemon node (hidden) in it
+    # spawned as the direct listing began, not once it was done (it then waits 2 s or more for discovery)
+    assert spawned is not None and ended - spawned > 1.5, (spawned, ended)
+
+    def status() -> dict[str, Any]:
+        done = rostool_rclpy(["daemon", "status", "--json"], cold_env, tmp_path, distro)
+        return json.loads(done.stdout)  # type: ignore[no-any-return]
+
+    assert wait_until(lambda: status()["running"] is True, timeout=30)
+    served = rostool_rclpy(["node", "list"], cold_env, tmp_path, distro)
+    assert served.stdout.split() == ["/beside_0", "/beside_1"]
 
 
 def test_a_cold_call_whose_answer_is_an_error_still_starts_the_daemon(cold_env: dict[str, str]) -> None:

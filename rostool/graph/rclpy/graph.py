@@ -48,6 +48,8 @@ TOPIC_WAIT_SECONDS = 1.5  # topic_type: how long a topic without publishers is g
 class RclpyGraph(Ros2Base):
     """The transport is one rclpy context and node (`context.py`), started on first need."""
 
+    waits_long = True  # a direct listing waits SETTLE_MIN_SECONDS or more (its floor)
+
     def _prepare(self, distro: str | None) -> None:
         from rostool.graph.rclpy.facts import rclpy_distro
         from rostool.interfaces.typestores import DEFAULT_DISTRO, DISTROS

@@ -56,6 +56,9 @@ class Ros2Base:
     style: Literal["ros1", "ros2"] = "ros2"
     encoding: Encoding = "cdr"
     types: Ros2Types
+    # a direct listing that waits seconds whatever the graph (a discovery floor) lets the graph daemon start
+    # beside it: the daemon's start-up then costs this process nothing and the next call finds it sooner
+    waits_long = False
 
     def __init__(
         self,
