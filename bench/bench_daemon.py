@@ -2,11 +2,13 @@
 real rclpy nodes (>= 10 nodes, >= 40 topics, services, actions; Fast DDS on loopback), in one run.
 
     .venv/bin/python bench/bench_daemon.py [--runs 20] [--cold 5] [--backend dds|rclpy]... [--cold-only]
+        [--then]
 
 Each call is a new process, as a user's shell runs it; calls of the two tools alternate, so a drift of the
 machine's speed touches both. `complete` counts the runs whose answer held every name the graph has.
 Cold: no daemon yet (it is stopped before each run): the call answers directly while it starts one.
-`--cold-only` measures only that (and the empty graph), not the warm calls.
+`--cold-only` measures only that (and the empty graph), not the warm calls; `--then` also times the same
+call made right after each cold one (answered by the daemon it started, or directly).
 """
 
 from __future__ import annotations
@@ -118,6 +120,7 @@ def main() -> None:
     parser.add_argument("--cold", type=int, default=5)
     parser.add_argument("--backend", action="append", choices=("dds", "rclpy"))
     parser.add_argument("--cold-only", action="store_true")
+    parser.add_argument("--then", action="store_true", help="time a second call right after each cold one")
     args = parser.parse_args()
     backends = args.backend or ["dds", "rclpy"]
     scratch = Path(tempfile.mkdtemp(prefix="rtb"))
@@ -171,7 +174,7 @@ def main() -> None:
         for backend in backends:
             command, tool_env = tools[backend]
             for verb, check in verbs(expected)[:2]:  # topic list, node list
-                cold, cold_ok, serving = [], 0, []
+                cold, cold_ok, serving, then, then_ok = [], 0, [], [], 0
                 for _ in range(args.cold):
                     subprocess.run(
                         [*command, "daemon", "stop"], env=tool_env, capture_output=True, timeout=60
@@ -180,10 +183,16 @@ def main() -> None:
                     seconds, done = timed([*command, *verb], tool_env)
                     cold.append(seconds)
                     cold_ok += done.returncode == 0 and check(done.stdout)
+                    if args.then:  # the same call again at once, as a shell script would
+                        seconds, done = timed([*command, *verb], tool_env)
+                        then.append(seconds)
+                        then_ok += done.returncode == 0 and check(done.stdout)
                     serving.append(until_serving(command, tool_env) - start)
                 served = f"{statistics.median(serving):.2f} s (max {max(serving):.2f} s) after the call began"
                 print(row(f"cold rostool {' '.join(verb)} ({backend})", cold, cold_ok),
                       f" min {min(cold):.3f} s; the daemon it started answered {served}")  # fmt: skip
+                if then:
+                    print(row(f"the same call right after ({backend})", then, then_ok))
         empty = {**env, **ros2_env()}
         kept = ("ROSTOOL_NO_DAEMON", "XDG_RUNTIME_DIR", "XDG_STATE_HOME", "ROSTOOL_DAEMON_BUILD")
         empty.update({k: env[k] for k in kept})

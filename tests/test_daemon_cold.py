@@ -89,6 +89,30 @@ def test_a_cold_rclpy_call_starts_its_daemon_while_it_waits_for_discovery(
     assert served.stdout.split() == ["/beside_0", "/beside_1"]
 
 
+@pytest.mark.parametrize("distro", ["jazzy"])
+def test_an_rclpy_call_made_while_its_daemon_starts_is_answered_by_that_daemon(
+    start_peer: Callable[..., RclpyPeer], cold_env: dict[str, str], tmp_path: Path, distro: str
+) -> None:
+    for i in range(2):
+        start_peer("--name", f"waiting_{i}", "--talk", f"/waiting_{i}")
+
+    def status() -> dict[str, Any]:
+        done = rostool_rclpy(["daemon", "status", "--json"], cold_env, tmp_path, distro)
+        return json.loads(done.stdout)  # type: ignore[no-any-return]
+
+    starting = rostool_rclpy_popen(["daemon", "start"], cold_env, tmp_path, distro)
+    try:
+        # it holds its lock while it settles its graph (seconds, on the rclpy backend), before it serves
+        assert wait_until(lambda: status().get("starting") is True, timeout=30)
+        listed = rostool_rclpy(["node", "list"], cold_env, tmp_path, distro)
+        assert (listed.returncode, listed.stdout.split()) == (0, ["/waiting_0", "/waiting_1"])
+        assert starting.wait(timeout=30) == 0
+        assert status()["queries"] >= 1  # the listing was that daemon's answer, not a direct one
+    finally:
+        starting.kill()
+        starting.communicate()
+
+
 def test_a_cold_call_whose_answer_is_an_error_still_starts_the_daemon(cold_env: dict[str, str]) -> None:
     done = rostool(["node", "info", "/nobody"], cold_env)
     assert done.returncode == 1 and len(done.stderr.splitlines()) == 1

@@ -76,7 +76,8 @@ def stop(every: bool) -> None:
 @daemon.command()
 @json_option
 def status(as_json: bool) -> None:
-    """Whether the daemon of this graph runs: its pid, socket, backend, domain, uptime and graph size.
+    """Whether the daemon of this graph runs (or is starting): its pid, socket, backend, domain, uptime,
+    graph size and the queries it has answered.
 
     \b
     Examples:
@@ -85,11 +86,17 @@ def status(as_json: bool) -> None:
     """
     client = _client()
     found: dict[str, Any] = client.status() or {"running": False, "socket": str(client.place.socket)}
+    if not found["running"]:
+        holder = client.lock_holder()  # held while a daemon settles its graph, before it serves
+        found["starting"] = holder is not None
+        if holder is not None:
+            found["pid"] = holder
     if as_json:
         print_json(found)
         return
     if not found["running"]:
-        click.echo("The daemon is not running")
+        starting = f"starting (pid {found['pid']})" if found["starting"] else "not running"
+        click.echo(f"The daemon is {starting}")
         return
     click.echo("The daemon is running")
     size = found["graph"]
@@ -99,3 +106,4 @@ def status(as_json: bool) -> None:
                f"{size['actions']} actions")  # fmt: skip
     relays = found.get("relays") or []
     click.echo(f"  relays: {len(relays)}" + (f" ({', '.join(relays)})" if relays else ""))
+    click.echo(f"  queries answered: {found.get('queries', 0)}")

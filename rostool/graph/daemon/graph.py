@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import sys
 import threading
+import time
 from collections.abc import Callable
 from dataclasses import asdict
 from typing import TYPE_CHECKING, Any, Literal
@@ -40,6 +41,12 @@ if TYPE_CHECKING:
     from rostool.graph.daemon.relay_client import RelayedSubscription
     from rostool.graph.qos import QosRequest
     from rostool.graph.recording import Encoding
+
+
+# how long a call waits for a daemon that is starting: it serves once its interpreter is up and its graph
+# has settled, 2-3 s after its spawn on the DDS backend, 4-5 s on the rclpy backend (a 3.3 s floor with Fast
+# DDS); past this (a daemon stuck starting), the call answers directly
+STARTING_DAEMON_SECONDS = 6.0
 
 
 class DaemonGraph:
@@ -169,12 +176,17 @@ class DaemonGraph:
         its participant, still describing itself, is one more the direct listing waits for (measured: a
         cold `node list` waited until 2.7 s for it, instead of 1.2-1.5 s), and its start-up takes the CPU
         this process needs. Not so when the direct listing waits a floor whatever the graph (`waits_long`,
-        the rclpy backend's): then the daemon starts beside it, and is ready seconds sooner."""
+        the rclpy backend's): then the daemon starts beside it, and is ready seconds sooner. A daemon
+        already starting is waited for (`_from_starting_daemon`)."""
         start: Callable[[], Any] | None = None
         if not self._bypass:
             try:
                 return ask()
             except DaemonAbsent:
+                if self._client.lock_holder() is not None:
+                    served = self._from_starting_daemon(ask)
+                    if served:
+                        return served[0]
                 direct = self.direct  # its discovery starts now, whatever `directly` does first
                 start = self._start
                 if getattr(direct, "waits_long", False):
@@ -197,6 +209,26 @@ class DaemonGraph:
             raise
         start()
         return answer
+
+    def _from_starting_daemon(self, ask: Callable[[], Any]) -> tuple[Any] | None:
+        """The answer of a daemon that is starting (its lock held: it settles its graph before it serves),
+        or None to answer directly (it ended, or is stuck). It began sooner, so it serves sooner than a
+        direct answer begun now would come (measured: a call right after a cold one, 0.56 s instead of
+        3.5 s on the rclpy backend; 2.7 s on the DDS backend, whose direct listing also waited for the
+        starting daemon's participant to describe itself). Asked before this process joins the graph: its
+        participant would be one more the starting daemon waits for (the DDS backend's, a bare one, up to
+        its grace), and an rclpy one's node would be in the daemon's answer."""
+        deadline = time.monotonic() + STARTING_DAEMON_SECONDS
+        while time.monotonic() < deadline:
+            time.sleep(0.1)
+            try:
+                return (ask(),)
+            except DaemonAbsent:
+                if self._client.lock_holder() is None:  # it ended without serving
+                    return None
+            except (OtherBuild, DaemonSilent, PlaceRefused):
+                return None
+        return None
 
     def _replace(self) -> None:
         self._client.start_detached(replacing=True)  # it waits for the old one's lock

@@ -56,6 +56,7 @@ class Daemon:
         self.graph: Any = None
         self.relays: set[Relay] = set()
         self.relays_lock = threading.Lock()
+        self.queries = 0  # graph queries answered (`daemon status` shows whether calls reach this daemon)
 
     # --- the graph -------------------------------------------------------------------------------
     def open_graph(self) -> None:
@@ -86,6 +87,7 @@ class Daemon:
             return {"error": f"graph daemon: {method!r} is not a query it answers"}
         try:
             with self.graph_lock:
+                self.queries += 1
                 self.graph.wait_for_newcomers(ignore=_guid(request.get("own")))
                 return {"ok": served[0](getattr(self.graph, str(method))(*args))}
         except RostoolError as err:
@@ -143,6 +145,7 @@ class Daemon:
             "domain": int(dict(self.place.fields)["domain"]), "uptime": uptime,
             "build": self.build, "log": str(self.place.log), "graph": size, "key": dict(self.place.fields),
             "relays": sorted(relay.topic for relay in list(self.relays)), "memory": memory(),
+            "queries": self.queries,
         }  # fmt: skip
 
     # --- the socket ------------------------------------------------------------------------------
