@@ -2,13 +2,14 @@
 real rclpy nodes (>= 10 nodes, >= 40 topics, services, actions; Fast DDS on loopback), in one run.
 
     .venv/bin/python bench/bench_daemon.py [--runs 20] [--cold 5] [--backend dds|rclpy]... [--cold-only]
-        [--then]
+        [--then] [--cold-at-once N]
 
 Each call is a new process, as a user's shell runs it; calls of the two tools alternate, so a drift of the
 machine's speed touches both. `complete` counts the runs whose answer held every name the graph has.
 Cold: no daemon yet (it is stopped before each run): the call answers directly while it starts one.
 `--cold-only` measures only that (and the empty graph), not the warm calls; `--then` also times the same
-call made right after each cold one (answered by the daemon it started, or directly).
+call made right after each cold one (answered by the daemon it started, or directly); `--cold-at-once N`
+starts N `topic list` together with no daemon yet.
 """
 
 from __future__ import annotations
@@ -121,6 +122,7 @@ def main() -> None:
     parser.add_argument("--backend", action="append", choices=("dds", "rclpy"))
     parser.add_argument("--cold-only", action="store_true")
     parser.add_argument("--then", action="store_true", help="time a second call right after each cold one")
+    parser.add_argument("--cold-at-once", type=int, default=0, help="N `topic list` at once, no daemon yet")
     args = parser.parse_args()
     backends = args.backend or ["dds", "rclpy"]
     scratch = Path(tempfile.mkdtemp(prefix="rtb"))
@@ -193,6 +195,11 @@ def main() -> None:
                       f" min {min(cold):.3f} s; the daemon it started answered {served}")  # fmt: skip
                 if then:
                     print(row(f"the same call right after ({backend})", then, then_ok))
+            if args.cold_at_once:
+                subprocess.run([*command, "daemon", "stop"], env=tool_env, capture_output=True, timeout=60)
+                label, calls = f"rostool ({backend}), no daemon yet", args.cold_at_once
+                print(at_once([*command, "topic", "list"], tool_env, expected["topic"], label, calls))
+                until_serving(command, tool_env)
         empty = {**env, **ros2_env()}
         kept = ("ROSTOOL_NO_DAEMON", "XDG_RUNTIME_DIR", "XDG_STATE_HOME", "ROSTOOL_DAEMON_BUILD")
         empty.update({k: env[k] for k in kept})

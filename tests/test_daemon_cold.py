@@ -22,7 +22,7 @@ from typing import Any
 import pytest
 
 from tests.ros2_peers import RclpyPeer, rostool_rclpy, rostool_rclpy_popen
-from tests.support import rostool, wait_until
+from tests.support import rostool, rostool_popen, wait_until
 
 
 @pytest.fixture
@@ -111,6 +111,22 @@ def test_an_rclpy_call_made_while_its_daemon_starts_is_answered_by_that_daemon(
     finally:
         starting.kill()
         starting.communicate()
+
+
+@pytest.mark.parametrize("distro", ["jazzy"])
+def test_calls_made_at_once_with_no_daemon_are_answered_by_the_one_the_cold_call_starts(
+    start_peer: Callable[..., RclpyPeer], cold_env: dict[str, str]
+) -> None:
+    for i in range(2):
+        start_peer("--name", f"burst_{i}", "--talk", f"/burst_{i}")
+    calls = [rostool_popen(["topic", "list"], cold_env) for _ in range(6)]
+    answers = [(*call.communicate(timeout=60), call.returncode) for call in calls]
+    for out, err, code in answers:
+        assert (code, err) == (0, "")
+        assert {"/burst_0", "/burst_1"} <= set(out.split())
+    # one of them answered directly and started the daemon; the five others waited for it (each answering
+    # directly would be one more participant: a burst of them fails past what the host's DDS can hold)
+    assert daemon_status(cold_env).get("queries", 0) >= 5
 
 
 def test_a_cold_call_whose_answer_is_an_error_still_starts_the_daemon(cold_env: dict[str, str]) -> None:

@@ -59,6 +59,7 @@ class DaemonClient:
         self.env = env
         self.place: DaemonPlace = place or daemon_place(requested_backend, env)
         self._build: str | None = None
+        self._cold: Any = None  # the key's cold-call claim, once this process holds it
 
     @property
     def build(self) -> str:
@@ -152,6 +153,41 @@ class DaemonClient:
             fcntl.flock(handle, fcntl.LOCK_UN)
             return None
 
+    def claim_cold_call(self) -> bool:
+        """Whether this process is its key's cold call: the one that answers directly and starts the
+        daemon (an exclusive lock on the key's `.cold` file, held for this process's life and by the
+        daemon it starts). Calls made meanwhile wait for that daemon: each answering directly would be one
+        more participant (a burst of them fails, past the DDS participants a host can hold)."""
+        if self._cold is not None:
+            return True
+        handle = os.fdopen(os.open(self._cold_path(), os.O_RDWR | os.O_CREAT, 0o600), "r+")
+        try:
+            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            handle.close()
+            return False
+        self._cold = handle
+        return True
+
+    def cold_call_elsewhere(self) -> bool:
+        """Whether another process holds the key's cold-call claim (a cold call, or the daemon it started)."""
+        if self._cold is not None:
+            return False
+        try:
+            handle = open(self._cold_path(), encoding="utf-8")  # noqa: SIM115
+        except FileNotFoundError:
+            return False
+        with handle:
+            try:
+                fcntl.flock(handle, fcntl.LOCK_SH | fcntl.LOCK_NB)
+            except BlockingIOError:
+                return True
+            fcntl.flock(handle, fcntl.LOCK_UN)
+            return False
+
+    def _cold_path(self) -> str:
+        return str(self.place.lock.with_name(f"{self.place.name}.cold"))
+
     def start_detached(self, idle: float | None = None, replacing: bool = False) -> subprocess.Popen[bytes]:
         """Start the daemon in its own session, its output in its log; the caller does not wait for it."""
         log_dir = private_dir(state_dir(self.env))
@@ -163,11 +199,14 @@ class DaemonClient:
             args += ["--idle", str(idle)]
         if replacing:
             args.append("--replace")
+        # the daemon keeps this process's cold-call claim: the calls waiting for it go on waiting after
+        # this process has ended, until it serves (or ends)
+        claim = (self._cold.fileno(),) if self._cold is not None else ()
         with open(log_dir / self.place.log.name, "a", encoding="utf-8") as log:
             os.chmod(log.name, 0o600)
             return subprocess.Popen(
                 args, env=env, stdin=subprocess.DEVNULL, stdout=log, stderr=log, cwd="/",
-                start_new_session=True, close_fds=True,
+                start_new_session=True, close_fds=True, pass_fds=claim,
             )  # fmt: skip
 
     def status(self) -> dict[str, Any] | None:

@@ -45,8 +45,9 @@ if TYPE_CHECKING:
 
 # how long a call waits for a daemon that is starting: it serves once its interpreter is up and its graph
 # has settled, 2-3 s after its spawn on the DDS backend, 4-5 s on the rclpy backend (a 3.3 s floor with Fast
-# DDS); past this (a daemon stuck starting), the call answers directly
-STARTING_DAEMON_SECONDS = 6.0
+# DDS), and a cold call answering directly (1.4 s, 3.5 s) may not have spawned it yet; past this (a daemon
+# stuck starting), the call answers directly
+STARTING_DAEMON_SECONDS = 10.0
 
 
 class DaemonGraph:
@@ -183,7 +184,7 @@ class DaemonGraph:
             try:
                 return ask()
             except DaemonAbsent:
-                if self._client.lock_holder() is not None:
+                if self._client.lock_holder() is not None or not self._client.claim_cold_call():
                     served = self._from_starting_daemon(ask)
                     if served:
                         return served[0]
@@ -211,8 +212,9 @@ class DaemonGraph:
         return answer
 
     def _from_starting_daemon(self, ask: Callable[[], Any]) -> tuple[Any] | None:
-        """The answer of a daemon that is starting (its lock held: it settles its graph before it serves),
-        or None to answer directly (it ended, or is stuck). It began sooner, so it serves sooner than a
+        """The answer of a daemon that is starting (its lock held: it settles its graph before it serves)
+        or that the key's cold call is about to start, or None to answer directly (nobody brings one, or it
+        is stuck). It began sooner, so it serves sooner than a
         direct answer begun now would come (measured: a call right after a cold one, 0.56 s instead of
         3.5 s on the rclpy backend; 2.7 s on the DDS backend, whose direct listing also waited for the
         starting daemon's participant to describe itself). Asked before this process joins the graph: its
@@ -224,10 +226,12 @@ class DaemonGraph:
             try:
                 return (ask(),)
             except DaemonAbsent:
-                if self._client.lock_holder() is None:  # it ended without serving
-                    return None
+                if self._client.lock_holder() is None and not self._client.cold_call_elsewhere():
+                    return None  # it ended without serving, or the cold call ended without starting it
             except (OtherBuild, DaemonSilent, PlaceRefused):
                 return None
+        self._warn(f"the graph daemon did not serve within {STARTING_DAEMON_SECONDS:g} s of this call; "
+                   "answering directly (`rostool daemon stop` resets it)")  # fmt: skip
         return None
 
     def _replace(self) -> None:
