@@ -8,6 +8,7 @@ heartbeat)."""
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import shutil
@@ -80,13 +81,35 @@ def test_a_cold_rclpy_call_starts_its_daemon_while_it_waits_for_discovery(
     # spawned as the direct listing began, not once it was done (it then waits 2 s or more for discovery)
     assert spawned is not None and ended - spawned > 1.5, (spawned, ended)
 
-    def status() -> dict[str, Any]:
-        done = rostool_rclpy(["daemon", "status", "--json"], cold_env, tmp_path, distro)
-        return json.loads(done.stdout)  # type: ignore[no-any-return]
-
+    status = rclpy_status(cold_env, tmp_path, distro)
     assert wait_until(lambda: status()["running"] is True, timeout=30)
     served = rostool_rclpy(["node", "list"], cold_env, tmp_path, distro)
     assert served.stdout.split() == ["/beside_0", "/beside_1"]
+
+
+def rclpy_status(env: dict[str, str], tmp_path: Path, distro: str) -> Callable[[], dict[str, Any]]:
+    """`daemon status --json` of the rclpy backend's daemon, each call a new rostool."""
+
+    def status() -> dict[str, Any]:
+        done = rostool_rclpy(["daemon", "status", "--json"], env, tmp_path, distro)
+        return json.loads(done.stdout)  # type: ignore[no-any-return]
+
+    return status
+
+
+@contextlib.contextmanager
+def rclpy_daemon_starting(env: dict[str, str], tmp_path: Path, distro: str) -> Iterator[Callable[[], Any]]:
+    """`daemon start` of the rclpy backend, entered once its daemon holds its lock but does not serve yet
+    (it settles its graph first: seconds on this backend), left once it serves; yields `rclpy_status`."""
+    status = rclpy_status(env, tmp_path, distro)
+    starting = rostool_rclpy_popen(["daemon", "start"], env, tmp_path, distro)
+    try:
+        assert wait_until(lambda: status().get("starting") is True, timeout=30)
+        yield status
+        assert starting.wait(timeout=30) == 0
+    finally:
+        starting.kill()
+        starting.communicate()
 
 
 @pytest.mark.parametrize("distro", ["jazzy"])
@@ -95,22 +118,21 @@ def test_an_rclpy_call_made_while_its_daemon_starts_is_answered_by_that_daemon(
 ) -> None:
     for i in range(2):
         start_peer("--name", f"waiting_{i}", "--talk", f"/waiting_{i}")
-
-    def status() -> dict[str, Any]:
-        done = rostool_rclpy(["daemon", "status", "--json"], cold_env, tmp_path, distro)
-        return json.loads(done.stdout)  # type: ignore[no-any-return]
-
-    starting = rostool_rclpy_popen(["daemon", "start"], cold_env, tmp_path, distro)
-    try:
-        # it holds its lock while it settles its graph (seconds, on the rclpy backend), before it serves
-        assert wait_until(lambda: status().get("starting") is True, timeout=30)
+    with rclpy_daemon_starting(cold_env, tmp_path, distro) as status:
         listed = rostool_rclpy(["node", "list"], cold_env, tmp_path, distro)
         assert (listed.returncode, listed.stdout.split()) == (0, ["/waiting_0", "/waiting_1"])
-        assert starting.wait(timeout=30) == 0
-        assert status()["queries"] >= 1  # the listing was that daemon's answer, not a direct one
-    finally:
-        starting.kill()
-        starting.communicate()
+    assert status()["queries"] >= 1  # the listing was that daemon's answer, not a direct one
+
+
+@pytest.mark.parametrize("distro", ["jazzy"])
+def test_with_spin_time_a_call_answers_directly_though_its_daemon_starts(
+    start_peer: Callable[..., RclpyPeer], cold_env: dict[str, str], tmp_path: Path, distro: str
+) -> None:
+    start_peer("--name", "spun", "--talk", "/spun")
+    with rclpy_daemon_starting(cold_env, tmp_path, distro) as status:
+        listed = rostool_rclpy(["node", "list", "--spin-time", "4"], cold_env, tmp_path, distro)
+        assert (listed.returncode, listed.stdout.split()) == (0, ["/spun"])
+    assert status()["queries"] == 0  # ros2cli's meaning: the direct listing waited the time asked
 
 
 @pytest.mark.parametrize("distro", ["jazzy"])

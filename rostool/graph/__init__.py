@@ -66,7 +66,7 @@ def open_graph(
             return direct()
         from rostool.graph.daemon.graph import daemon_graph
 
-        return daemon_graph(ros2_backend, direct)
+        return daemon_graph(ros2_backend, direct, wait_for_starting=spin_time is None)
     from rostool.graph.ros1.graph import Ros1Graph
 
     return Ros1Graph(node_name, interface_paths)

@@ -140,18 +140,10 @@ class DaemonClient:
     # --- life ------------------------------------------------------------------------------------
     def lock_holder(self) -> int | None:
         """The pid of the daemon holding the key's lock (running or starting), None when it is free."""
-        try:
-            handle = open(self.place.lock, encoding="utf-8")  # noqa: SIM115
-        except FileNotFoundError:
+        text = _held(str(self.place.lock))
+        if text is None:
             return None
-        with handle:
-            try:
-                fcntl.flock(handle, fcntl.LOCK_SH | fcntl.LOCK_NB)
-            except BlockingIOError:
-                text = handle.read().strip()
-                return int(text) if text.isdigit() else -1
-            fcntl.flock(handle, fcntl.LOCK_UN)
-            return None
+        return int(text) if text.isdigit() else -1
 
     def claim_cold_call(self) -> bool:
         """Whether this process is its key's cold call: the one that answers directly and starts the
@@ -171,19 +163,7 @@ class DaemonClient:
 
     def cold_call_elsewhere(self) -> bool:
         """Whether another process holds the key's cold-call claim (a cold call, or the daemon it started)."""
-        if self._cold is not None:
-            return False
-        try:
-            handle = open(self._cold_path(), encoding="utf-8")  # noqa: SIM115
-        except FileNotFoundError:
-            return False
-        with handle:
-            try:
-                fcntl.flock(handle, fcntl.LOCK_SH | fcntl.LOCK_NB)
-            except BlockingIOError:
-                return True
-            fcntl.flock(handle, fcntl.LOCK_UN)
-            return False
+        return self._cold is None and _held(self._cold_path()) is not None
 
     def _cold_path(self) -> str:
         return str(self.place.lock.with_name(f"{self.place.name}.cold"))
@@ -262,6 +242,21 @@ class DaemonClient:
                 probe.connect(str(self.place.socket))
             except ConnectionRefusedError:
                 os.unlink(self.place.socket)
+
+
+def _held(path: str) -> str | None:
+    """The text of a lock file that a process holds (flock), None when it is free or missing."""
+    try:
+        handle = open(path, encoding="utf-8")  # noqa: SIM115
+    except FileNotFoundError:
+        return None
+    with handle:
+        try:
+            fcntl.flock(handle, fcntl.LOCK_SH | fcntl.LOCK_NB)
+        except BlockingIOError:
+            return handle.read().strip()
+        fcntl.flock(handle, fcntl.LOCK_UN)
+        return None
 
 
 def every_daemon(env: Mapping[str, str] = os.environ) -> list[DaemonClient]:

@@ -55,9 +55,13 @@ class DaemonGraph:
     style: Literal["ros1", "ros2"] = "ros2"
     encoding: Encoding = "cdr"
 
-    def __init__(self, client: DaemonClient, direct: Callable[[], Graph]) -> None:
+    def __init__(
+        self, client: DaemonClient, direct: Callable[[], Graph], wait_for_starting: bool = True
+    ) -> None:
         self._client = client
         self._make_direct = direct
+        # False with --spin-time: the direct wait it sets is what was asked for
+        self._wait_for_starting = wait_for_starting
         self._direct: Graph | None = None
         self._direct_lock = threading.Lock()  # a relay's reading thread may need it too
         self._bypass = False
@@ -184,7 +188,8 @@ class DaemonGraph:
             try:
                 return ask()
             except DaemonAbsent:
-                if self._client.lock_holder() is not None or not self._client.claim_cold_call():
+                starting = self._client.lock_holder() is not None or not self._client.claim_cold_call()
+                if starting and self._wait_for_starting:
                     served = self._from_starting_daemon(ask)
                     if served:
                         return served[0]
@@ -214,12 +219,11 @@ class DaemonGraph:
     def _from_starting_daemon(self, ask: Callable[[], Any]) -> tuple[Any] | None:
         """The answer of a daemon that is starting (its lock held: it settles its graph before it serves)
         or that the key's cold call is about to start, or None to answer directly (nobody brings one, or it
-        is stuck). It began sooner, so it serves sooner than a
-        direct answer begun now would come (measured: a call right after a cold one, 0.56 s instead of
-        3.5 s on the rclpy backend; 2.7 s on the DDS backend, whose direct listing also waited for the
-        starting daemon's participant to describe itself). Asked before this process joins the graph: its
-        participant would be one more the starting daemon waits for (the DDS backend's, a bare one, up to
-        its grace), and an rclpy one's node would be in the daemon's answer."""
+        is stuck). That daemon began sooner, so it serves sooner than a direct answer begun now would come
+        (measured, a call right after a cold one: 0.6 s instead of 3.5 s on the rclpy backend, 1.1-1.3 s
+        instead of 2.7 s on the DDS backend). Asked before this process joins the graph: its participant
+        would be one more the starting daemon waits for (a bare DDS one, up to its grace), and an rclpy
+        one's node would be in the daemon's answer."""
         deadline = time.monotonic() + STARTING_DAEMON_SECONDS
         while time.monotonic() < deadline:
             time.sleep(0.1)
@@ -282,9 +286,12 @@ class DaemonGraph:
         return self._ask("action_info", resolve(name), wait)  # type: ignore[no-any-return]
 
 
-def daemon_graph(requested_backend: str | None, direct: Callable[[], Graph]) -> Graph:
+def daemon_graph(
+    requested_backend: str | None, direct: Callable[[], Graph], wait_for_starting: bool = True
+) -> Graph:
     """The graph the verbs get when a daemon may serve: a DaemonGraph, or the direct backend (with one
-    warning line) when the user's daemon directory is not private."""
+    warning line) when the user's daemon directory is not private. `wait_for_starting`: a query that finds
+    the daemon starting waits for it (False: it answers directly, as `--spin-time` asks)."""
     from rostool.graph.rclpy.select import requested
     from rostool.graph.ros2_base.env import discovery_range
 
@@ -295,4 +302,4 @@ def daemon_graph(requested_backend: str | None, direct: Callable[[], Graph]) -> 
     except PlaceRefused as err:
         DaemonGraph._warn(f"{err}; answering directly")
         return direct()
-    return DaemonGraph(client, direct)  # type: ignore[return-value]
+    return DaemonGraph(client, direct, wait_for_starting)  # type: ignore[return-value]
