@@ -17,7 +17,7 @@ import subprocess
 import sys
 import time
 from collections.abc import Mapping
-from typing import Any
+from typing import IO, Any
 
 from rostool.errors import RostoolError
 from rostool.graph.daemon import NO_DAEMON_ENV, wire
@@ -59,7 +59,7 @@ class DaemonClient:
         self.env = env
         self.place: DaemonPlace = place or daemon_place(requested_backend, env)
         self._build: str | None = None
-        self._cold: Any = None  # the key's cold-call claim, once this process holds it
+        self._cold: IO[str] | None = None  # the key's cold-call claim, once this process holds it
 
     @property
     def build(self) -> str:

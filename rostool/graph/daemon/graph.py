@@ -201,8 +201,7 @@ class DaemonGraph:
             except OtherBuild:
                 start = self._replace
             except DaemonSilent as err:
-                self._warn(f"the graph daemon did not answer ({err}); answering directly "
-                           "(`rostool daemon stop` resets it)")  # fmt: skip
+                self._warn_silent(err)
             except PlaceRefused as err:
                 self._warn(f"{err}; answering directly")
             self._bypass = True
@@ -232,7 +231,10 @@ class DaemonGraph:
             except DaemonAbsent:
                 if self._client.lock_holder() is None and not self._client.cold_call_elsewhere():
                     return None  # it ended without serving, or the cold call ended without starting it
-            except (OtherBuild, DaemonSilent, PlaceRefused):
+            except DaemonSilent as err:
+                self._warn_silent(err)
+                return None
+            except (OtherBuild, PlaceRefused):
                 return None
         self._warn(f"the graph daemon did not serve within {STARTING_DAEMON_SECONDS:g} s of this call; "
                    "answering directly (`rostool daemon stop` resets it)")  # fmt: skip
@@ -244,6 +246,10 @@ class DaemonGraph:
     def _start(self) -> None:
         if self._client.lock_holder() is None:
             self._client.start_detached()
+
+    def _warn_silent(self, err: DaemonSilent) -> None:
+        self._warn(f"the graph daemon did not answer ({err}); answering directly "
+                   "(`rostool daemon stop` resets it)")  # fmt: skip
 
     @staticmethod
     def _warn(text: str) -> None:
