@@ -31,6 +31,12 @@ from tests.support import (
 if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
     signal.signal(signal.SIGINT, signal.default_int_handler)
 
+# rostool follows ROS 2's default discovery range (SUBNET: multicast on the host's interfaces). A test whose
+# environment is a copy of this one, not ros2_env()'s, must still stay on loopback (the network rule): the
+# suite's own processes default to LOCALHOST. Across-machines tests run in private namespaces with the
+# user's defaults (tests/netns.py) and remove the variable themselves.
+os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+
 # the real ROS 2 peers' fixtures (distro, graph_env, start_peer)
 pytest_plugins = ("tests.ros2_peers", "tests.ros2_backends")
 

@@ -22,11 +22,14 @@ import threading
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import pytest
 
 from tests.support import IN_CI, ros2_env, rostool, rostool_popen
+
+if TYPE_CHECKING:
+    from tests.netns import Machine
 
 DISTROS = ("jazzy", "kilted")
 PEER_SCRIPT = Path(__file__).resolve().parent / "rclpy_peer.py"
@@ -131,18 +134,40 @@ def peer_env(env: dict[str, str], tmp_path: Path, lease: float | None = None) ->
     return clean
 
 
+def machine_peer_env(env: dict[str, str], tmp_path: Path) -> dict[str, str]:
+    """A peer's environment on a private machine (tests/netns.py), where ROS's defaults are safe: `env`'s
+    ROS settings (domain, range, static peers) kept, Fast DDS with no profile."""
+    hidden = ("CYCLONEDDS_URI", "FASTRTPS_DEFAULT_PROFILES_FILE", "FASTDDS_DEFAULT_PROFILES_FILE",
+              "PYTHONPATH", "PYTHONHOME", "VIRTUAL_ENV")  # fmt: skip
+    clean = {k: v for k, v in env.items() if k not in hidden}
+    home = tmp_path / "peer_ros_home"
+    home.mkdir(exist_ok=True)
+    clean.update(RMW_IMPLEMENTATION="rmw_fastrtps_cpp", ROS_HOME=str(home), ROS_LOG_DIR=str(home / "log"),
+                 PYTHONUNBUFFERED="1")  # fmt: skip
+    return clean
+
+
 class RclpyPeer:
     """One running rclpy node (tests/rclpy_peer.py) and the JSON events it reported."""
 
     def __init__(
-        self, distro: str, env: dict[str, str], tmp_path: Path, args: list[str], lease: float | None = None
+        self,
+        distro: str,
+        env: dict[str, str],
+        tmp_path: Path,
+        args: list[str],
+        lease: float | None = None,
+        on: Machine | None = None,
     ) -> None:
+        """`on`: a private machine (tests/netns.py) to run on, with ROS's defaults and `env`'s ROS settings
+        instead of the loopback-only profile."""
         self.distro = distro
         self.events: list[dict[str, Any]] = []
         self._changed = threading.Condition()
+        command = [str(peer_python(distro)), str(PEER_SCRIPT), *args]
         self.proc = subprocess.Popen(
-            [str(peer_python(distro)), str(PEER_SCRIPT), *args],
-            env=peer_env(env, tmp_path, lease),
+            on.command(command) if on else command,
+            env=machine_peer_env(env, tmp_path) if on else peer_env(env, tmp_path, lease),
             stdout=subprocess.PIPE,
             stderr=subprocess.PIPE,
             text=True,

@@ -1,6 +1,6 @@
 """ROS 2 over DDS: rostool processes talk to each other the way ROS 2 nodes do (loopback, no multicast).
 
-Every test uses its own ROS_DOMAIN_ID and rostool's default LOCALHOST discovery (interface 127.0.0.1,
+Every test uses its own ROS_DOMAIN_ID and LOCALHOST discovery, said explicitly (interface 127.0.0.1,
 multicast off, 127.0.0.1 as the only peer), so nothing leaves the machine and tests never see each other.
 """
 

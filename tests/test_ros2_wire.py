@@ -64,21 +64,33 @@ def test_participant_entities_info_matches_rosbags_cdr(distro: str, store: Store
     ]
 
 
-def test_localhost_config_stays_on_loopback() -> None:
-    config = dds.cyclone_config({})
-    assert '<NetworkInterface address="127.0.0.1"/>' in config
+def test_discovery_range_follows_ros2() -> None:
+    """ROS 2's default range is SUBNET (Cyclone's multicast); LOCALHOST stays on 127.0.0.1 unless static peers
+    must be reached elsewhere (tests/test_across_machines.py checks each against a real node)."""
+    default = dds.cyclone_config({})
+    assert env.discovery_range({}) == "SUBNET"
+    assert "AllowMulticast" not in default and "127.0.0.1" not in default and "<Peers>" not in default
+    local = {"ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}
+    config = dds.cyclone_config(local)
+    assert '<NetworkInterface address="127.0.0.1"/>' in config and dds.loopback_only(local)
     assert "<AllowMulticast>false</AllowMulticast>" in config
     assert '<Peers><Peer address="127.0.0.1"/></Peers>' in config
     assert "<MaxAutoParticipantIndex>32</MaxAutoParticipantIndex>" in config
-    with_user = dds.cyclone_config({"CYCLONEDDS_URI": "file:///etc/cyclone.xml"})
+    far = {**local, "ROS_STATIC_PEERS": "198.18.2.20"}
+    config = dds.cyclone_config(far)
+    assert "NetworkInterface" not in config and not dds.loopback_only(far)  # the peer is elsewhere
+    assert '<Peers><Peer address="127.0.0.1"/><Peer address="198.18.2.20"/></Peers>' in config
+    subnet_peer = dds.cyclone_config({"ROS_STATIC_PEERS": "198.18.2.20; robot.local"})
+    assert '<Peers><Peer address="198.18.2.20"/><Peer address="robot.local"/></Peers>' in subnet_peer
+    assert "<ParticipantIndex>auto</ParticipantIndex>" in subnet_peer
+    with_user = dds.cyclone_config({**local, "CYCLONEDDS_URI": "file:///etc/cyclone.xml"})
     assert with_user.endswith(",file:///etc/cyclone.xml")  # appended, so the user's settings win
     assert env.discovery_range({"ROS_LOCALHOST_ONLY": "0"}) == "SUBNET"
     assert env.discovery_range({"ROS_LOCALHOST_ONLY": "1", "ROS_AUTOMATIC_DISCOVERY_RANGE": "SUBNET"}) == (
         "LOCALHOST"
     )
-    subnet = dds.cyclone_config({"ROS_AUTOMATIC_DISCOVERY_RANGE": "SUBNET"})
-    assert "AllowMulticast" not in subnet and "127.0.0.1" not in subnet
-    assert "<Tag>ros_discovery_off_" in dds.cyclone_config({"ROS_AUTOMATIC_DISCOVERY_RANGE": "OFF"})
+    off = dds.cyclone_config({"ROS_AUTOMATIC_DISCOVERY_RANGE": "OFF", "ROS_STATIC_PEERS": "198.18.2.20"})
+    assert "<Tag>ros_discovery_off_" in off and "198.18.2.20" not in off
 
 
 @pytest.mark.parametrize("value", ["-1", "233", "x"])

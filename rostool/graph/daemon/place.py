@@ -5,7 +5,8 @@ Sockets and locks go in a directory only the user can enter: `$ROSTOOL_RUNTIME_D
 a symlink, another user's, or open to others. Logs go in `$XDG_STATE_HOME/rostool` (`~/.local/state`).
 
 One daemon per key: the environment variables that decide which graph a ROS 2 process sees (domain,
-discovery range and peers, RMW and its profiles, security), the backend asked for and the interpreter.
+discovery range and peers, RMW and its profiles, security), the network namespace, the backend asked for and
+the interpreter.
 The build (rostool's version and its sources' modification times) is not part of the key: a daemon of
 another build is told to stop and replaced.
 """
@@ -94,8 +95,20 @@ def key_fields(backend: str, env: Mapping[str, str] = os.environ) -> tuple[tuple
     from rostool.graph.ros2_base.env import domain_id
 
     fields = [("backend", backend), ("domain", str(domain_id(env))), ("python", sys.executable)]
+    network = network_namespace()
+    if network:
+        fields.append(("network", network))
     fields += [(name, env[name]) for name in KEY_VARIABLES if name != "ROS_DOMAIN_ID" and env.get(name)]
     return tuple(fields)
+
+
+def network_namespace() -> str:
+    """This process's network namespace (`net:[4026531840]`), or "" where there is none to read: two
+    containers or namespaces that share /tmp see different networks, so they must never share a daemon."""
+    try:
+        return os.readlink("/proc/self/ns/net")
+    except OSError:
+        return ""
 
 
 def daemon_place(backend: str, env: Mapping[str, str] = os.environ, create: bool = True) -> DaemonPlace:

@@ -106,12 +106,9 @@ def _dds_facts(env: Mapping[str, str]) -> dict[str, Any]:
     except metadata.PackageNotFoundError:
         cyclone = "?"
     named = env.get("ROS_DISTRO", "").strip()
-    scope_set = any(env.get(k, "").strip() for k in ("ROS_AUTOMATIC_DISCOVERY_RANGE", "ROS_LOCALHOST_ONLY"))
+    scope: str | None
     try:
-        scope, scope_from = (
-            ros2_env.discovery_range(env),
-            "ROS_AUTOMATIC_DISCOVERY_RANGE / ROS_LOCALHOST_ONLY",
-        )
+        scope, scope_from = ros2_env.discovery_range_reason(env)
     except Exception as err:
         scope, scope_from = None, str(err)
     return {
@@ -120,5 +117,5 @@ def _dds_facts(env: Mapping[str, str]) -> dict[str, Any]:
         "distro": distro_from_env(env),
         "distro_from": "ROS_DISTRO" if named else "rostool's default: ROS_DISTRO is unset",
         "discovery_range": scope,
-        "discovery_range_from": scope_from if scope_set else "rostool's default; ROS 2's is SUBNET",
+        "discovery_range_from": scope_from,
     }

@@ -1,9 +1,12 @@
-"""ROS 1 environment: ROS_MASTER_URI, ROS_HOSTNAME, ROS_IP, ROS_NAMESPACE."""
+"""ROS 1 environment: ROS_MASTER_URI, ROS_HOSTNAME, ROS_IP, ROS_NAMESPACE, and the address rostool's nodes
+give the master for other nodes to call back."""
 
 from __future__ import annotations
 
+import functools
 import os
 import socket
+import sys
 from urllib.parse import urlparse
 
 from rostool.errors import RostoolError
@@ -25,26 +28,98 @@ def master_uri() -> str:
     return uri
 
 
-def _is_loopback(host: str) -> bool:
+def is_loopback(host: str) -> bool:
+    """Whether `host` (a name or a literal address) is loopback."""
     return host in ("localhost", "::1") or host.startswith("127.")
 
 
+
 def advertised_host() -> str:
-    """The host name peers use to reach us (ROS_HOSTNAME, else ROS_IP, else as rospy decides)."""
+    """The host name peers use to reach us: ROS_HOSTNAME, else ROS_IP; else 127.0.0.1 for a master on
+    loopback; else this machine's name, as rospy does, unless that name cannot take other machines back
+    here (it resolves to loopback, as Debian's default /etc/hosts makes it, or not at all): then the source
+    address of this machine's route to the master (what `ip route get <master>` says), said once on stderr."""
     for var in ("ROS_HOSTNAME", "ROS_IP"):
         value = os.environ.get(var, "").strip()
         if value:
             return value
     master_host = urlparse(master_uri()).hostname or "localhost"
-    if _is_loopback(master_host):
+    if is_loopback(master_host):
         return "127.0.0.1"
-    return socket.gethostname()
+    return _name_for_remote_master(master_host, urlparse(master_uri()).port or MASTER_PORT)
+
+
+def resolve(host: str) -> str | None:
+    """The first IPv4 (else IPv6) address `host` resolves to here, or None."""
+    try:
+        infos = socket.getaddrinfo(host, None, proto=socket.IPPROTO_TCP)
+    except (OSError, UnicodeError):
+        return None
+    infos.sort(key=lambda info: info[0] != socket.AF_INET)
+    return str(infos[0][4][0]) if infos else None
+
+
+def route_source(host: str, port: int = MASTER_PORT) -> str | None:
+    """This machine's address on its route to `host` (the kernel's choice, as `ip route get` shows it): a
+    UDP socket connected there, which sends nothing. None when `host` does not resolve or has no route."""
+    address = resolve(host)
+    if address is None:
+        return None
+    family = socket.AF_INET6 if ":" in address else socket.AF_INET
+    try:
+        with socket.socket(family, socket.SOCK_DGRAM) as probe:
+            probe.connect((address, port))
+            return str(probe.getsockname()[0])
+    except OSError:
+        return None
+
+
+def loopback_name(name: str) -> str | None:
+    """Why other machines cannot reach this machine by `name` ("resolves to 127.0.1.1", "does not
+    resolve"), or None when it resolves to an address of a network."""
+    address = resolve(name)
+    if address is None:
+        return "does not resolve here"
+    if is_loopback(address):
+        return f"resolves to {address}"
+    return None
+
+
+def served_name() -> str:
+    """The name a server listening on every interface (`rostool core --host 0.0.0.0`) advertises:
+    ROS_HOSTNAME, ROS_IP, else this machine's name, or when that name cannot take other machines back here,
+    the source address of its default route (said once on stderr)."""
+    for var in ("ROS_HOSTNAME", "ROS_IP"):
+        value = os.environ.get(var, "").strip()
+        if value:
+            return value
+    # 192.0.2.1 (TEST-NET-1) is never on a route of its own: the kernel answers with the default route
+    return _name_for_remote_master("192.0.2.1", MASTER_PORT, "other machines")
+
+
+@functools.cache
+def _name_for_remote_master(master_host: str, master_port: int, whom: str = "") -> str:
+    name = socket.gethostname()
+    why = loopback_name(name)
+    if why is None:
+        return name
+    address = route_source(master_host, master_port)
+    if address is None or is_loopback(address):
+        return name  # the master itself is on this machine (or unreachable): nothing better to offer
+    whom = whom or f"the master at {master_host}"
+    sys.stderr.write(
+        f"rostool: advertising {address} to {whom} for other nodes to call back: this machine's name "
+        f"{name!r} {why}, which they cannot reach ({address} is this machine's address on its route to "
+        f"{'them' if whom == 'other machines' else 'the master'}); set ROS_IP={address} to pin it, or "
+        "ROS_IP/ROS_HOSTNAME to choose another\n"
+    )
+    return address
 
 
 def bind_host() -> str:
     """Bind loopback when we advertise a loopback name (as rospy does), all interfaces otherwise."""
     host = advertised_host()
-    if _is_loopback(host):
+    if is_loopback(host):
         return "127.0.0.1" if host == "localhost" else host
     return "0.0.0.0"
 

@@ -23,7 +23,7 @@ from typing import Any
 from xmlrpc.server import SimpleXMLRPCRequestHandler, SimpleXMLRPCServer
 
 from rostool.errors import RostoolError
-from rostool.graph.ros1.env import MASTER_HOST, MASTER_PORT
+from rostool.graph.ros1.env import MASTER_HOST, MASTER_PORT, served_name
 from rostool.graph.ros1.master_api import MasterApi
 
 DEFAULT_DISTRO = "noetic"
@@ -85,11 +85,7 @@ def core_params() -> dict[str, str]:
 
 def _advertised_host(host: str) -> str:
     if host in ("", "0.0.0.0", "::"):
-        for variable in ("ROS_HOSTNAME", "ROS_IP"):
-            value = os.environ.get(variable, "").strip()
-            if value:
-                return value
-        return socket.gethostname()
+        return served_name()
     return host
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import http.client
+import socket
 import threading
 import xmlrpc.client
 from typing import Any
@@ -11,6 +12,20 @@ from xml.parsers.expat import ExpatError
 from rostool.errors import RostoolError
 
 DEFAULT_TIMEOUT = 5.0
+# A host that swallows packets without a word (a VPN that is down, a firewall that drops) would hold every
+# call for its whole timeout before the connection even exists; a master or node on any real network
+# accepts within a fraction of this. Reads keep the call's own timeout (a busy master may answer slowly).
+CONNECT_TIMEOUT = 3.0
+
+
+class _Connection(http.client.HTTPConnection):
+    """An HTTP connection whose connect gives up after CONNECT_TIMEOUT, its reads after its timeout."""
+
+    def connect(self) -> None:
+        connect_timeout = CONNECT_TIMEOUT if self.timeout is None else min(CONNECT_TIMEOUT, self.timeout)
+        self.sock = socket.create_connection((self.host, self.port), connect_timeout, self.source_address)
+        self.sock.settimeout(self.timeout)
+        self.sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
 
 
 class _TimeoutTransport(xmlrpc.client.Transport):
@@ -19,9 +34,12 @@ class _TimeoutTransport(xmlrpc.client.Transport):
         self._timeout = timeout
 
     def make_connection(self, host: Any) -> http.client.HTTPConnection:
-        connection = super().make_connection(host)
-        connection.timeout = self._timeout
-        return connection
+        # as xmlrpc.client.Transport does (one kept connection per host), with a connect that gives up sooner
+        if self._connection and host == self._connection[0]:
+            return self._connection[1]
+        chost, self._extra_headers, _x509 = self.get_host_info(host)
+        self._connection = host, _Connection(chost, timeout=self._timeout)
+        return self._connection[1]
 
 
 def server_proxy(uri: str, timeout: float = DEFAULT_TIMEOUT) -> xmlrpc.client.ServerProxy:

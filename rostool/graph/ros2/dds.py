@@ -1,14 +1,17 @@
 """The DDS side of a ROS 2 process: domain id, discovery range, Cyclone configuration, QoS, raw samples.
 
-Mirrors what rmw_cyclonedds_cpp does when rclcpp/rclpy create a context (rmw_node.cpp, Iron and later):
-- ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST: multicast off, `localhost` as a static peer, participant
-  index `auto` with at most 32 participants per host; SUBNET: Cyclone's defaults (multicast);
-  OFF: multicast off and a per-process discovery tag. ROS_STATIC_PEERS adds peers (not for OFF).
-  ROS_LOCALHOST_ONLY=1 (deprecated) forces LOCALHOST, =0 lets the range variable decide.
+Mirrors what rmw does when rclcpp/rclpy create a context (Iron and later), as a real rclpy node on the
+same machine with the same environment sees the graph (tests/test_across_machines.py holds the matrix):
+- ROS_AUTOMATIC_DISCOVERY_RANGE unset or SUBNET (ROS 2's default): Cyclone's defaults, multicast on the
+  interface it picks; ROS_STATIC_PEERS are also asked by unicast (through routers, where no multicast goes).
+- LOCALHOST: multicast off, 127.0.0.1 as a static peer, participant index `auto` with at most 32
+  participants per host. With no static peers rostool also binds to 127.0.0.1 only (Cyclone would listen
+  on 0.0.0.0), so nothing it does leaves the machine; with static peers it uses the machine's interfaces,
+  as it must to reach them.
+- OFF: multicast off and a per-process discovery tag; SYSTEM_DEFAULT: Cyclone's own settings. Static peers
+  are ignored in both, as rmw does. ROS_LOCALHOST_ONLY=1 (deprecated) forces LOCALHOST.
 - CYCLONEDDS_URI, when set, is appended after that generated fragment, so the user's file wins.
 - the participant's USER_DATA is `enclave=/;`.
-Two deliberate differences: rostool's default range is LOCALHOST (ROS 2's is SUBNET), and in LOCALHOST
-mode it also binds to 127.0.0.1, so nothing rostool does ever leaves the machine unless asked.
 """
 
 from __future__ import annotations
@@ -37,7 +40,7 @@ def cyclone_config(env: Mapping[str, str] = os.environ) -> str:
     discovery = ""
     if scope == "LOCALHOST":
         general = "<AllowMulticast>false</AllowMulticast>"
-        if not _user_selects_interfaces(env.get("CYCLONEDDS_URI", "")):
+        if loopback_only(env):
             # Cyclone refuses an interface selected twice (`lo` by the user, 127.0.0.1 by us): theirs wins
             general = '<Interfaces><NetworkInterface address="127.0.0.1"/></Interfaces>' + general
         peers = ["127.0.0.1", *peers]
@@ -65,6 +68,16 @@ def cyclone_config(env: Mapping[str, str] = os.environ) -> str:
     if user:
         parts.append(user)
     return ",".join(parts)
+
+
+def loopback_only(env: Mapping[str, str] = os.environ) -> bool:
+    """Whether this environment keeps DDS on 127.0.0.1: LOCALHOST with no static peer to reach elsewhere and
+    no interface chosen by the user's CYCLONEDDS_URI."""
+    return (
+        discovery_range(env) == "LOCALHOST"
+        and not static_peers(env)
+        and not _user_selects_interfaces(env.get("CYCLONEDDS_URI", ""))
+    )
 
 
 def _user_selects_interfaces(uri: str) -> bool:
@@ -253,7 +266,7 @@ class Participant:
         config = cyclone_config(env)
         silence_cyclone_log()
         free_qos_copies()
-        if self.range == "LOCALHOST" and not _user_selects_interfaces(env.get("CYCLONEDDS_URI", "")):
+        if loopback_only(env):
             from rostool.graph.ros2.loopback_bind import bind_to_loopback
 
             bind_to_loopback()  # Cyclone would listen on 0.0.0.0 too

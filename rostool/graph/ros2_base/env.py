@@ -26,17 +26,28 @@ def domain_id(env: Mapping[str, str] = os.environ) -> int:
 
 
 def discovery_range(env: Mapping[str, str] = os.environ) -> str:
-    localhost_only = env.get("ROS_LOCALHOST_ONLY", "").strip()
-    if localhost_only == "1":
+    """ROS 2's automatic discovery range (Iron and later, as rcl reads it): SUBNET unless told otherwise;
+    the deprecated ROS_LOCALHOST_ONLY=1 still forces LOCALHOST."""
+    if env.get("ROS_LOCALHOST_ONLY", "").strip() == "1":
         return "LOCALHOST"
     text = env.get("ROS_AUTOMATIC_DISCOVERY_RANGE", "").strip().upper()
     if not text:
-        return "SUBNET" if localhost_only == "0" else "LOCALHOST"
+        return "SUBNET"
     if text not in RANGES:
         raise RostoolError(
             f"ROS_AUTOMATIC_DISCOVERY_RANGE={text!r} is not valid: use one of {', '.join(RANGES)}"
         )
     return text
+
+
+def discovery_range_reason(env: Mapping[str, str] = os.environ) -> tuple[str, str]:
+    """The discovery range and where it came from, as `doctor` says it."""
+    scope = discovery_range(env)
+    if env.get("ROS_LOCALHOST_ONLY", "").strip() == "1":
+        return scope, "ROS_LOCALHOST_ONLY=1 (deprecated)"
+    if env.get("ROS_AUTOMATIC_DISCOVERY_RANGE", "").strip():
+        return scope, "ROS_AUTOMATIC_DISCOVERY_RANGE"
+    return scope, "ROS 2's default: ROS_AUTOMATIC_DISCOVERY_RANGE is unset"
 
 
 def static_peers(env: Mapping[str, str] = os.environ) -> list[str]:

@@ -1,0 +1,229 @@
+"""Across machines: a laptop beside a robot (one subnet) and a far robot behind a router, as private
+network namespaces (tests/netns.py), with real peers on the robots: rclpy Jazzy/Kilted nodes on Fast DDS with
+ROS's defaults, Debian's rospy. rostool runs on the laptop as a user there would, with no setting but the
+one the case is about.
+
+The ROS 2 referee of discovery is a real rclpy node on the laptop with the same environment: rostool must see
+exactly the robot nodes it sees, in every setting (issue 36).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+import time
+from collections.abc import Iterator
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import pytest
+
+from tests.netns import PrivateNetwork, private_network
+from tests.ros2_peers import RclpyPeer, machine_peer_env, peer_python, rclpy_command
+from tests.support import (
+    DEBIAN_PYTHON,
+    Watched,
+    debian_env,
+    fresh_domain,
+    require_ros1_peers,
+    stop,
+    wait_until,
+)
+
+ROBOT_NODE, FAR_NODE = "/near_robot", "/far_robot"
+
+
+@pytest.fixture(scope="module")
+def network() -> Iterator[PrivateNetwork]:
+    with private_network() as made:
+        yield made
+
+
+def laptop_env(**settings: str) -> dict[str, str]:
+    """A user's shell on the laptop: no ROS variable but the ones given (and the test's domain)."""
+    env = {k: v for k, v in os.environ.items() if not k.startswith("ROS") and k != "CYCLONEDDS_URI"}
+    env.update(PYTHONUNBUFFERED="1", ROSTOOL_NO_DAEMON="1", **settings)
+    return env
+
+
+# --- ROS 2: discovery as ROS 2 defines it -------------------------------------------------------------
+
+# (settings on the laptop, the robot nodes a real rclpy node there sees): the matrix of issue 36
+FAR = "198.18.2.20"
+DISCOVERY_CASES = {
+    "defaults": ({}, {ROBOT_NODE}),
+    "subnet": ({"ROS_AUTOMATIC_DISCOVERY_RANGE": "SUBNET"}, {ROBOT_NODE}),
+    "static-peer": ({"ROS_STATIC_PEERS": FAR}, {ROBOT_NODE, FAR_NODE}),
+    "static-peers-one-missing": ({"ROS_STATIC_PEERS": f"198.18.2.99;{FAR}"}, {ROBOT_NODE, FAR_NODE}),
+    "localhost-static-peer": (
+        {"ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST", "ROS_STATIC_PEERS": FAR}, {FAR_NODE}
+    ),
+    "localhost": ({"ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}, set()),
+    "localhost-only-deprecated": ({"ROS_LOCALHOST_ONLY": "1"}, set()),
+    "off": ({"ROS_AUTOMATIC_DISCOVERY_RANGE": "OFF", "ROS_STATIC_PEERS": FAR}, set()),
+}  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def robots(network: PrivateNetwork, tmp_path_factory: pytest.TempPathFactory) -> Iterator[dict[str, str]]:
+    """A real rclpy Jazzy node on each robot, talking on /chatter, with ROS's defaults; the domain's env."""
+    peer_python("jazzy")
+    tmp = tmp_path_factory.mktemp("robots")
+    env = laptop_env(ROS_DOMAIN_ID=str(fresh_domain()))
+    near = RclpyPeer("jazzy", env, tmp, ["--name", ROBOT_NODE[1:], "--talk", "/chatter", "--rate", "5"],
+                     on=network.robot)  # fmt: skip
+    far = RclpyPeer("jazzy", env, tmp, ["--name", FAR_NODE[1:], "--talk", "/far_chatter", "--rate", "5"],
+                    on=network.far)  # fmt: skip
+    try:
+        near.wait_for("ready")
+        far.wait_for("ready")
+        yield env
+    finally:
+        near.stop()
+        far.stop()
+
+
+def robot_nodes(nodes: list[str]) -> set[str]:
+    return {node for node in nodes if node in (ROBOT_NODE, FAR_NODE)}
+
+
+def referee_view(network: PrivateNetwork, env: dict[str, str], tmp_path: Path, settle: float) -> set[str]:
+    """The robot nodes a real rclpy node on the laptop sees after `settle` seconds."""
+    referee = RclpyPeer("jazzy", env, tmp_path, ["--name", "referee", "--watch"], on=network.laptop)
+    try:
+        referee.wait_for("ready")
+        time.sleep(settle)
+        return robot_nodes(referee.of("graph")[-1]["nodes"])
+    finally:
+        referee.stop()
+
+
+def laptop_listing(network: PrivateNetwork, env: dict[str, str], tmp_path: Path, backend: str) -> set[str]:
+    """The robot nodes `rostool --ros2 node list` on the laptop lists, on one backend."""
+    if backend == "dds":
+        listing = network.laptop.run([sys.executable, "-m", "rostool", "--ros2", "node", "list"], env)
+    else:
+        listing = network.laptop.run(rclpy_command(["--ros2", "node", "list"], "jazzy"),
+                                     machine_peer_env(env, tmp_path))  # fmt: skip
+    return robot_nodes(listing.stdout.split())
+
+
+def test_discovery_matches_a_real_node(
+    network: PrivateNetwork, robots: dict[str, str], tmp_path: Path
+) -> None:
+    """Every setting at once (they share the robots' domain; each counts only the robots' nodes): the real
+    rclpy node's view, and `node list` on each backend."""
+    jobs = {}
+    with ThreadPoolExecutor(3 * len(DISCOVERY_CASES)) as pool:
+        for case, (settings, _expected) in DISCOVERY_CASES.items():
+            env = {**robots, **settings}
+            # the referee waits 4 s: a Fast DDS participant answers a newcomer on its next announcement
+            jobs[case, "real rclpy node"] = pool.submit(referee_view, network, env, tmp_path, 4.0)
+            for backend in ("dds", "rclpy"):
+                jobs[case, backend] = pool.submit(laptop_listing, network, env, tmp_path, backend)
+    seen = {key: job.result() for key, job in jobs.items()}
+    views = ("real rclpy node", "dds", "rclpy")
+    table = "\n".join(
+        f"{case:26} " + " | ".join(f"{who}: {sorted(seen[case, who])}" for who in views)
+        for case in DISCOVERY_CASES
+    )
+    wrong = [
+        f"{case}: {who} saw {sorted(seen[case, who])}, expected {sorted(expected)}"
+        for case, (_settings, expected) in DISCOVERY_CASES.items()
+        for who in views
+        if seen[case, who] != expected
+    ]
+    assert not wrong, "\n".join(wrong) + "\n" + table
+
+
+# --- ROS 1: a master on the robot, rostool on the laptop with ROS_MASTER_URI alone ----------------------
+
+ROBOT_ROS1 = r"""
+import sys, rospy
+from std_msgs.msg import String
+from std_srvs.srv import SetBool, SetBoolResponse
+rospy.init_node("robot")
+talk = rospy.Publisher("/robot_says", String, queue_size=10)
+def heard(msg):
+    print("heard", msg.data, flush=True)
+rospy.Subscriber("/laptop_says", String, heard)
+rospy.Service("/robot_switch", SetBool, lambda req: SetBoolResponse(True, "switched %s" % req.data))
+print("ready", flush=True)
+rate = rospy.Rate(5)
+count = 0
+while not rospy.is_shutdown():
+    count += 1
+    talk.publish("robot %d" % count)
+    rate.sleep()
+"""
+
+
+@pytest.fixture(scope="module")
+def ros1_robot(network: PrivateNetwork, tmp_path_factory: pytest.TempPathFactory) -> Iterator[Watched]:
+    """Debian's rosmaster and a rospy node on the robot, set up as a robot is (ROS_IP: its address)."""
+    require_ros1_peers()
+    tmp = tmp_path_factory.mktemp("ros1_robot")
+    robot = network.robot.address
+    env = debian_env({**laptop_env(), "ROS_MASTER_URI": f"http://{robot}:11311", "ROS_IP": robot,
+                      "ROS_HOME": str(tmp), "ROS_LOG_DIR": str(tmp)})  # fmt: skip
+    master = network.robot.popen(["rosmaster", "--core", "-p", "11311"], env)
+    script = tmp / "robot.py"
+    script.write_text(ROBOT_ROS1)
+    node = None
+    try:
+        assert wait_until(lambda: network.robot.run(["rosnode", "list"], env, timeout=10).returncode == 0)
+        node = Watched(network.robot.popen([DEBIAN_PYTHON, str(script)], env))
+        assert node.wait_for(lambda out: "ready" in out), node.stop()
+        yield node
+    finally:
+        if node is not None:
+            node.stop()
+        stop(master)
+
+
+def test_ros1_from_the_laptop_with_the_master_uri_alone(
+    network: PrivateNetwork, ros1_robot: Watched
+) -> None:
+    """The laptop's host name resolves to 127.0.1.1 (Debian's /etc/hosts): rostool advertises its address on
+    the route to the master instead, says so once, and the robot's subscriber hears what it publishes."""
+    env = laptop_env(ROS_MASTER_URI=f"http://{network.robot.address}:11311")
+    rostool = [sys.executable, "-m", "rostool"]
+    pub = network.laptop.run([*rostool, "topic", "pub", "-1", "/laptop_says", "std_msgs/String",
+                              "data: from laptop"], env)  # fmt: skip
+    assert pub.returncode == 0, pub.stderr
+    assert ros1_robot.wait_for(lambda out: "heard from laptop" in out, timeout=10), ros1_robot.stdout
+    chosen = [line for line in pub.stderr.splitlines() if "advertising" in line]
+    assert len(chosen) == 1 and "198.18.1.10" in chosen[0] and "'laptop' resolves to 127.0.1.1" in chosen[0]
+    assert "ROS_IP=198.18.1.10" in chosen[0]
+    echo = network.laptop.run([*rostool, "topic", "echo", "/robot_says", "-n", "2"], env)
+    assert echo.returncode == 0 and echo.stdout.count('data: "robot ') == 2, echo.stderr
+    call = network.laptop.run([*rostool, "service", "call", "/robot_switch", "data: true"], env)
+    assert call.stdout.split() == ["success:", "True", "message:", '"switched', 'True"'], call.stderr
+    # ROS_IP always wins: the laptop's own name, pinned, is what the robot is told (and cannot reach)
+    pinned = network.laptop.run([*rostool, "topic", "pub", "-1", "/laptop_says", "std_msgs/String",
+                                 "data: pinned"], {**env, "ROS_HOSTNAME": "laptop"})  # fmt: skip
+    assert "advertising" not in pinned.stderr
+    assert "heard pinned" not in ros1_robot.stdout
+
+
+def test_unreachable_master_is_one_line_within_5_s(network: PrivateNetwork) -> None:
+    """A ROS_MASTER_URI host that does not exist, on the subnet, behind the router, or where the router drops
+    everything silently: one line, quickly."""
+    for host in ("198.18.1.99", "198.18.2.99", "198.18.9.9"):
+        env = laptop_env(ROS_MASTER_URI=f"http://{host}:11311")
+        began = time.monotonic()
+        done = network.laptop.run([sys.executable, "-m", "rostool", "--ros1", "topic", "list"], env)
+        took = time.monotonic() - began
+        assert done.returncode == 1 and len(done.stderr.strip().splitlines()) == 1, done.stderr
+        assert host in done.stderr and "Traceback" not in done.stderr
+        assert took < 5.0, f"{host}: {took:.1f} s"
+
+
+def test_a_daemon_serves_one_network(network: PrivateNetwork, tmp_path: Path) -> None:
+    """Two machines sharing /tmp (and the same environment) never share a graph daemon."""
+    env = laptop_env(ROS_DOMAIN_ID=str(fresh_domain()), ROSTOOL_RUNTIME_DIR=str(tmp_path / "run"))
+    status = [sys.executable, "-m", "rostool", "--ros2", "daemon", "status", "--json"]
+    machines = (network.laptop, network.robot)
+    sockets = {json.loads(machine.run(status, env).stdout)["socket"] for machine in machines}
+    assert len(sockets) == 2, sockets
