@@ -43,7 +43,12 @@ COMMANDS: dict[str, tuple[str, str, str]] = {
     "doctor": (
         "rostool.commands.doctor",
         "doctor",
-        "Show the ROS version, ROS 2 backend, RMW, distro and domain in use, and why.",
+        "Show the ROS version, ROS 2 backend, RMW, distro and domain in use, and check the network.",
+    ),
+    "multicast": (
+        "rostool.commands.multicast",
+        "multicast",
+        "Check that UDP multicast passes between machines (ros2 multicast).",
     ),
     "cheatsheet": (
         "rostool.commands.cheatsheet",

@@ -112,16 +112,24 @@ def laptop_listing(network: PrivateNetwork, env: dict[str, str], tmp_path: Path,
 def test_discovery_matches_a_real_node(
     network: PrivateNetwork, robots: dict[str, str], tmp_path: Path
 ) -> None:
-    """Every setting at once (they share the robots' domain; each counts only the robots' nodes): the real
-    rclpy node's view, and `node list` on each backend."""
+    """The real rclpy node's view in every setting at once (they share the robots' domain; each counts only
+    the robots' nodes), then `node list` on each backend, one setting at a time: a direct listing among a
+    dozen participants starting at once on two cores can settle before a robot described itself (issue 37's
+    "a direct listing is whole"; not what this test is about)."""
     jobs = {}
-    with ThreadPoolExecutor(3 * len(DISCOVERY_CASES)) as pool:
+    with ThreadPoolExecutor(len(DISCOVERY_CASES)) as pool:
+        for case, (settings, _expected) in DISCOVERY_CASES.items():
+            # the referee waits 4 s: a Fast DDS participant answers a newcomer on its next announcement
+            env = {**robots, **settings}
+            jobs[case, "real rclpy node"] = pool.submit(referee_view, network, env, tmp_path, 4.0)
+    with ThreadPoolExecutor(2) as pool:
         for case, (settings, _expected) in DISCOVERY_CASES.items():
             env = {**robots, **settings}
-            # the referee waits 4 s: a Fast DDS participant answers a newcomer on its next announcement
-            jobs[case, "real rclpy node"] = pool.submit(referee_view, network, env, tmp_path, 4.0)
-            for backend in ("dds", "rclpy"):
-                jobs[case, backend] = pool.submit(laptop_listing, network, env, tmp_path, backend)
+            listings = {backend: pool.submit(laptop_listing, network, env, tmp_path, backend)
+                        for backend in ("dds", "rclpy")}  # fmt: skip
+            for backend, listing in listings.items():
+                listing.result()
+                jobs[case, backend] = listing
     seen = {key: job.result() for key, job in jobs.items()}
     views = ("real rclpy node", "dds", "rclpy")
     table = "\n".join(
@@ -227,3 +235,64 @@ def test_a_daemon_serves_one_network(network: PrivateNetwork, tmp_path: Path) ->
     machines = (network.laptop, network.robot)
     sockets = {json.loads(machine.run(status, env).stdout)["socket"] for machine in machines}
     assert len(sockets) == 2, sockets
+
+
+# --- rostool doctor: why it cannot connect ------------------------------------------------------------
+
+
+def test_doctor_names_the_domain_in_use(
+    network: PrivateNetwork, robots: dict[str, str], tmp_path: Path
+) -> None:
+    """Nothing on the laptop's domain: doctor hears the robot's participant on its own domain (passively,
+    on that domain's discovery port), names it and its host, and fails in one line; an empty listing with a
+    participant of this machine elsewhere says where, in its one error line."""
+    domain = int(robots["ROS_DOMAIN_ID"])
+    wrong = {**robots, "ROS_DOMAIN_ID": str(domain + 101 if domain < 100 else domain - 101)}
+    doctor = [sys.executable, "-m", "rostool", "--ros2", "doctor"]
+    failed = network.laptop.run(doctor, wrong)
+    assert failed.returncode == 1, failed.stdout + failed.stderr
+    lines = [line for line in failed.stdout.splitlines() if line.startswith("FAILED")]
+    assert len(lines) == 1 and f"set ROS_DOMAIN_ID={domain}" in lines[0], failed.stdout
+    assert "hosts 198.18.1.20" in lines[0] and "198.18.2.20" not in lines[0]  # far: behind a router
+    report = json.loads(network.laptop.run([*doctor, "--json"], robots).stdout)
+    heard = f"participants on domain {domain} (heard from 198.18.1.20)"
+    assert report["checks"] == [{"name": "domain", "ok": True, "detail": heard}]
+    assert report["network"]["range"] == "SUBNET" and "eth0 198.18.1.10" in report["network"]["interfaces"]
+    local = RclpyPeer("jazzy", robots, tmp_path, ["--name", "laptop_node"], on=network.laptop)
+    try:
+        local.wait_for("ready")
+        empty = network.laptop.run([sys.executable, "-m", "rostool", "--ros2", "topic", "list"],
+                                   {**wrong, "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"})  # fmt: skip
+    finally:
+        local.stop()
+    assert empty.returncode == 1 and len(empty.stderr.strip().splitlines()) == 1, empty.stderr
+    assert f"1 on domain {domain}" in empty.stderr and f"set ROS_DOMAIN_ID={domain}?" in empty.stderr
+
+
+REGISTER = """
+import sys, xmlrpc.client
+master = xmlrpc.client.ServerProxy(sys.argv[1])
+for name, uri in (("/gone", "http://198.18.1.20:9/"), ("/mdns_robot", "http://robot.local:45100/")):
+    master.registerPublisher(name, "/ghost", "std_msgs/String", uri)
+"""
+
+
+def test_doctor_ros1(network: PrivateNetwork, ros1_robot: Watched) -> None:
+    """ROS 1: the master answers (and how fast), the advertised address, a node that does not answer and
+    a node whose host name this machine cannot resolve, each named with its URI."""
+    env = laptop_env(ROS_MASTER_URI=f"http://{network.robot.address}:11311")
+    network.laptop.run(["python3", "-c", REGISTER, env["ROS_MASTER_URI"]], env)
+    done = network.laptop.run([sys.executable, "-m", "rostool", "--ros1", "doctor", "--report"], env)
+    assert done.returncode == 1, done.stdout + done.stderr
+    out = done.stdout
+    assert f"ok master: {env['ROS_MASTER_URI']} answered in " in out
+    assert "ok advertised address: 198.18.1.10 (chosen by rostool" in out
+    assert "FAILED nodes answer: 1 of" in out and "/gone (http://198.18.1.20:9/)" in out
+    assert "FAILED node host names: this machine cannot resolve robot.local" in out
+    assert "/mdns_robot (http://robot.local:45100/)" in out and "2 of 4 network checks failed" in out
+    pinned = network.laptop.run([sys.executable, "-m", "rostool", "--ros1", "doctor"],
+                                {**env, "ROS_HOSTNAME": "laptop"})  # fmt: skip
+    assert "FAILED advertised address: laptop (from ROS_HOSTNAME) resolves to 127.0.1.1" in pinned.stdout
+    assert "set ROS_IP=198.18.1.10" in pinned.stdout and not any(
+        line.startswith("ok ") for line in pinned.stdout.splitlines()
+    )  # without --report, only what failed

@@ -1,5 +1,6 @@
 """`rostool doctor`: which ROS version, ROS 2 backend, RMW, distro, domain and discovery range a command
-would use, and why (in the spirit of `ros2 doctor --report`)."""
+would use, and why, then the network checks of that ROS version (roswtf's and `ros2 doctor`'s job): one
+line per failed check and exit 1, or `--report` for every check and fact."""
 
 from __future__ import annotations
 
@@ -8,22 +9,31 @@ from typing import Any
 import click
 
 from rostool.commands._common import json_option, print_json, ros2_backend, ros_version
+from rostool.graph.base import NetworkCheck
 
 
 @click.command("doctor")
+@click.option("--report", "full", is_flag=True, help="Every check and network fact, not only what failed.")
+@click.option("--listen", type=click.FloatRange(0, 30), default=None,
+              help="ROS 2: seconds to listen for other machines' participants (3.2).")  # fmt: skip
 @json_option
 @click.pass_context
-def doctor(ctx: click.Context, as_json: bool) -> None:
-    """Show what the graph verbs would use and why: ROS version, ROS 2 backend (rclpy or rostool's own
-    DDS), RMW, distro, domain and discovery range. Opens no graph.
+def doctor(ctx: click.Context, full: bool, listen: float | None, as_json: bool) -> None:
+    """Show what the graph verbs would use and why (ROS version, ROS 2 backend, RMW, distro, domain and
+    discovery range), then check the network. ROS 1: the master answers, the address this machine
+    advertises reaches back, every node's slave API answers, their host names resolve. ROS 2: the static
+    peers resolve; which domains this machine's participants use, and (SUBNET) which domains other machines
+    announce participants on, listened to passively; a domain with nothing on it names the one in use.
+    Each failed check is one line, and the exit status is 1. Opens no graph.
 
     \b
     Examples:
       rostool doctor
+      rostool doctor --report
       rostool --ros2-backend rclpy doctor --json
     """
     from rostool.errors import RostoolError
-    from rostool.graph import ros2_report, select_ros_version
+    from rostool.graph import network_checks, ros2_report, select_ros_version
 
     explicit = ros_version(ctx)
     version = select_ros_version(explicit)
@@ -32,12 +42,33 @@ def doctor(ctx: click.Context, as_json: bool) -> None:
         report["ros2"] = ros2_report(ros2_backend(ctx))
     except RostoolError as err:  # the backend asked for cannot serve: say so, and why, as a graph verb would
         report["ros2"] = {"backend": None, "error": str(err)}
+    failed = report["ros2"]["backend"] is None
+    try:
+        facts, checks = network_checks(version, listen)
+    except RostoolError as err:  # e.g. a ROS_DOMAIN_ID or ROS_MASTER_URI that is not valid
+        facts, checks = {}, [NetworkCheck("environment", False, str(err))]
+    report["network"] = facts
+    report["checks"] = [{"name": c.name, "ok": c.ok, "detail": c.detail} for c in checks]
     if as_json:
         print_json(report)
     else:
         _print(report)
-    if report["ros2"]["backend"] is None:
+        _print_checks(checks, facts, full)
+    if failed or not all(check.ok for check in checks):
         ctx.exit(1)
+
+
+def _print_checks(checks: list[NetworkCheck], facts: dict[str, Any], full: bool) -> None:
+    if full:  # the facts the table above has not shown
+        for name, value in facts.items():
+            if name not in ("domain", "range"):
+                click.echo(f"{name.replace('_', ' ')} : {value}")
+    for check in checks:
+        if full or not check.ok:
+            click.echo(f"{'ok' if check.ok else 'FAILED'} {check.name}: {check.detail}")
+    bad = sum(not check.ok for check in checks)
+    count = len(checks)
+    click.echo(f"{bad} of {count} network checks failed" if bad else f"All {count} network checks passed")
 
 
 def _print(report: dict[str, Any]) -> None:

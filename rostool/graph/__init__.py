@@ -101,6 +101,18 @@ def embedded_master(host: str, port: int) -> Master:
     return Master(host, port)
 
 
+def network_checks(version: int, listen: float | None = None) -> tuple[dict[str, Any], list[Any]]:
+    """`rostool doctor`'s network facts and checks (each with .name, .ok, .detail) for one ROS version."""
+    if version == 1:
+        from rostool.graph.ros1 import doctor as ros1_doctor
+
+        return {}, list(ros1_doctor.checks())
+    from rostool.graph.ros2_base import doctor as ros2_doctor
+
+    facts, found = ros2_doctor.checks(os.environ, ros2_doctor.LISTEN_SECONDS if listen is None else listen)
+    return facts, list(found)
+
+
 def ros2_report(ros2_backend: str | None) -> dict[str, Any]:
     """What `rostool doctor` says of ROS 2: the backend chosen and why, rclpy, RMW, distro, discovery."""
     from rostool.graph.rclpy import facts

@@ -11,6 +11,15 @@ if TYPE_CHECKING:
     from rostool.graph.recording import Encoding, RecordSource
 
 
+@dataclass(frozen=True)
+class NetworkCheck:
+    """One of `rostool doctor`'s network checks: its name, whether it passed, what was found (one line)."""
+
+    name: str
+    ok: bool
+    detail: str
+
+
 @dataclass
 class TopicInfo:
     """A topic as the listings show it: its type and the nodes that publish and subscribe to it."""

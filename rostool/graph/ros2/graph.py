@@ -93,10 +93,14 @@ class Ros2Graph(Ros2Base):
             found = cache.settle(maximum=NODES_MAX_SECONDS if nodes else SETTLE_MAX_SECONDS, nodes=nodes)
         if require_peers and self.require_peers and not found:
             participant = self.session.participant
+            from rostool.graph.ros2_base.doctor import other_domain_hint
+
+            hint = other_domain_hint(participant.domain_id) or (
+                ": is anything running with this ROS_DOMAIN_ID? `rostool doctor` checks the network"
+            )
             raise RostoolError(
                 f"no ROS 2 participants found on domain {participant.domain_id} within "
-                f"{window:g} s ({participant.range} discovery): is anything running with this "
-                "ROS_DOMAIN_ID? Nodes on other machines need ROS_AUTOMATIC_DISCOVERY_RANGE=SUBNET"
+                f"{window:g} s ({participant.range} discovery){hint}"
             )
         return cache
 

@@ -1,0 +1,183 @@
+"""ROS 2's network checks for `rostool doctor`, from the wire up, whatever the backend: the domain, range,
+static peers and interfaces discovery uses; the participants of this machine on each domain (the UDP ports
+they hold, read from /proc: no packet sent); and, where discovery may use multicast, the participants other
+machines announce on every domain, heard passively on each domain's discovery port.
+
+RTPS (DDS-RTPS 2.x, 9.6.1.1) puts domain D's multicast discovery at port 7400 + 250 D and participant p's
+unicast discovery at 7410 + 250 D + 2 p; every RTPS message starts with "RTPS", the protocol version, the
+vendor id and the sender's 12-byte GUID prefix, which is all this module reads."""
+
+from __future__ import annotations
+
+import contextlib
+import select
+import socket
+import struct
+import time
+from collections import defaultdict
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from rostool.graph.base import NetworkCheck as Check
+from rostool.graph.ros2_base.env import DOMAIN_ID_MAX, discovery_range, domain_id, static_peers
+
+PORT_BASE, DOMAIN_GAIN, UNICAST_OFFSET = 7400, 250, 10
+SPDP_GROUP = "239.255.0.1"
+LISTEN_SECONDS = 3.2  # Fast DDS announces a participant every 3 s (Cyclone every 30 s: a quiet one is missed)
+VENDORS = {
+    b"\x01\x01": "RTI Connext DDS (rmw_connextdds)",
+    b"\x01\x0f": "eProsima Fast DDS (rmw_fastrtps_cpp)",
+    b"\x01\x10": "Eclipse Cyclone DDS (rmw_cyclonedds_cpp, or rostool)",
+    b"\x01\x12": "GurumNetworks GurumDDS (rmw_gurumdds_cpp)",
+}
+
+
+@dataclass
+class Heard:
+    """Participants announcing themselves on one domain."""
+
+    participants: set[bytes] = field(default_factory=set)  # GUID prefixes
+    hosts: set[str] = field(default_factory=set)
+    vendors: set[str] = field(default_factory=set)
+
+
+def local_domains(proc: Path = Path("/proc/net")) -> dict[int, int]:
+    """Domain -> how many participants of this machine (this network namespace) hold its unicast discovery
+    ports, from /proc/net/udp and udp6."""
+    held: dict[int, set[int]] = defaultdict(set)
+    for name in ("udp", "udp6"):
+        with contextlib.suppress(OSError), open(proc / name, encoding="ascii") as table:
+            next(table, None)
+            for line in table:
+                local = line.split()[1]
+                port = int(local.rsplit(":", 1)[1], 16) - PORT_BASE
+                domain, offset = divmod(port, DOMAIN_GAIN)
+                if port >= 0 and domain <= DOMAIN_ID_MAX and offset >= UNICAST_OFFSET and offset % 2 == 0:
+                    held[domain].add((offset - UNICAST_OFFSET) // 2)
+    return {domain: len(indexes) for domain, indexes in sorted(held.items())}
+
+
+def other_domain_hint(domain: int) -> str:
+    """For an empty listing: where this machine's participants are instead (or "")."""
+    elsewhere = {d: n for d, n in local_domains().items() if d != domain}
+    if not elsewhere:
+        return ""
+    shown = ", ".join(f"{n} on domain {d}" for d, n in elsewhere.items())
+    best = max(elsewhere, key=lambda d: elsewhere[d])
+    return f"; this machine's participants are elsewhere ({shown}): set ROS_DOMAIN_ID={best}?"
+
+
+def listen(seconds: float = LISTEN_SECONDS) -> dict[int, Heard]:
+    """What every domain's multicast discovery port carries for `seconds` (our sockets share the ports with
+    the participants of this machine, as they share them with each other)."""
+    sockets: dict[socket.socket, int] = {}
+    heard: dict[int, Heard] = defaultdict(Heard)
+    try:
+        for domain in range(DOMAIN_ID_MAX + 1):
+            sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM, socket.IPPROTO_UDP)
+            sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+            with contextlib.suppress(AttributeError, OSError):
+                sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEPORT, 1)
+            try:
+                sock.bind(("", PORT_BASE + DOMAIN_GAIN * domain))
+                membership = struct.pack("4s4s", socket.inet_aton(SPDP_GROUP), socket.inet_aton("0.0.0.0"))
+                sock.setsockopt(socket.IPPROTO_IP, socket.IP_ADD_MEMBERSHIP, membership)
+            except OSError:
+                sock.close()
+                continue
+            sock.setblocking(False)
+            sockets[sock] = domain
+        deadline = time.monotonic() + seconds
+        while sockets and (left := deadline - time.monotonic()) > 0:
+            ready, _, _ = select.select(list(sockets), [], [], left)
+            for sock in ready:
+                with contextlib.suppress(OSError):
+                    data, (host, _port) = sock.recvfrom(65536)
+                    if len(data) >= 20 and data[:4] == b"RTPS":
+                        entry = heard[sockets[sock]]
+                        entry.participants.add(data[8:20])
+                        entry.hosts.add(host)
+                        entry.vendors.add(VENDORS.get(data[6:8], f"vendor {data[6:8].hex()}"))
+    finally:
+        for sock in sockets:
+            sock.close()
+    return dict(heard)
+
+
+def interfaces() -> list[tuple[str, str]]:
+    """(name, IPv4 address) of this machine's interfaces that have one."""
+    import fcntl
+
+    found = []
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
+        for _index, name in socket.if_nameindex():
+            request = struct.pack("256s", name.encode()[:15])
+            try:
+                reply = fcntl.ioctl(probe.fileno(), 0x8915, request)  # SIOCGIFADDR
+            except OSError:
+                continue
+            found.append((name, socket.inet_ntoa(reply[20:24])))
+    return found
+
+
+def checks(env: Mapping[str, str], seconds: float = LISTEN_SECONDS) -> tuple[dict[str, object], list[Check]]:
+    """The facts of discovery and the checks, as `doctor` shows them."""
+    domain, scope, peers = domain_id(env), discovery_range(env), static_peers(env)
+    used = interfaces()
+    if scope == "LOCALHOST" and not peers:
+        used = [(name, address) for name, address in used if address.startswith("127.")]
+    facts: dict[str, object] = {
+        "domain": domain, "range": scope, "static_peers": peers,
+        "interfaces": [f"{name} {address}" for name, address in used],
+    }  # fmt: skip
+    found: list[Check] = []
+    unresolved = [peer for peer in peers if _resolves(peer) is None]
+    if peers:
+        found.append(Check("static peers", not unresolved, f"{', '.join(unresolved)} do not resolve here"
+                           if unresolved else f"{len(peers)} resolve: {', '.join(peers)}"))  # fmt: skip
+    local = local_domains()
+    multicast = scope in ("SUBNET", "SYSTEM_DEFAULT") and seconds > 0
+    heard = listen(seconds) if multicast else {}
+    facts["this_machine"] = {str(d): n for d, n in local.items()}
+    facts["heard"] = {str(d): {"participants": len(h.participants), "hosts": sorted(h.hosts),
+                               "vendors": sorted(h.vendors)} for d, h in sorted(heard.items())}  # fmt: skip
+    listened = seconds if multicast else None
+    found.append(_domain_check(domain, local, heard, listened))
+    vendors = {v for h in heard.values() for v in h.vendors}
+    if len(vendors) > 1:
+        named = ", ".join(sorted(vendors))
+        found.append(Check("middleware", True, f"several DDS vendors announce here: {named} (topics "
+                           "interoperate; services between some do not)"))  # fmt: skip
+    return facts, found
+
+
+def _domain_check(
+    domain: int, local: dict[int, int], heard: dict[int, Heard], listened: float | None
+) -> Check:
+    here = local.get(domain, 0) + len(heard.get(domain, Heard()).participants)
+    if here:
+        hosts = sorted(heard.get(domain, Heard()).hosts)
+        whom = f" (heard from {', '.join(hosts)})" if hosts else " (on this machine)"
+        return Check("domain", True, f"participants on domain {domain}{whom}")
+    others: dict[int, tuple[int, set[str]]] = {}
+    for d, count in local.items():
+        others[d] = (count, {"this machine"})
+    for d, entry in heard.items():
+        count, hosts = others.get(d, (0, set()))
+        others[d] = (max(count, len(entry.participants)), hosts | entry.hosts)
+    others.pop(domain, None)
+    if not others:  # nothing running is not a fault of the network: said, not failed
+        how = "on this machine" + (f" or by multicast within {listened:g} s" if listened else "")
+        return Check("domain", True, f"no ROS 2 participant on any domain ({how})")
+    best = max(others, key=lambda d: others[d][0])
+    shown = "; ".join(f"{n} participants on domain {d} (hosts {', '.join(sorted(h))})"
+                      for d, (n, h) in sorted(others.items()))  # fmt: skip
+    return Check("domain", False, f"nothing on domain {domain}; {shown}: set ROS_DOMAIN_ID={best}")
+
+
+def _resolves(host: str) -> str | None:
+    try:
+        return socket.gethostbyname(host)
+    except (OSError, UnicodeError):
+        return None
