@@ -104,9 +104,6 @@ class Machine:
             self.command(argv), env=env, capture_output=True, text=True, timeout=timeout, input=input
         )
 
-    def link(self, up: bool) -> None:
-        """Take this machine's link down or up (a Wi-Fi drop)."""
-        _ip("-n", self.namespace, "link", "set", self.interface, "up" if up else "down")
 
 
 @dataclass
@@ -164,6 +161,11 @@ class PrivateNetwork:
             ["ip", "netns", "exec", self.router.namespace, "sysctl", "-qw", "net.ipv4.ip_forward=1"],
             check=True, capture_output=True,
         )  # fmt: skip
+
+    def link(self, machine: Machine, up: bool) -> None:
+        """Drop or restore `machine`'s link at the switch, as a Wi-Fi link drops: its own interface and
+        routes stay, nothing passes meanwhile."""
+        _ip("-n", self.lan.namespace, "link", "set", f"p-{machine.name}", "up" if up else "down")
 
     def close(self) -> None:
         for namespace in reversed(self.made):

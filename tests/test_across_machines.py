@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import json
 import os
+import re
+import subprocess
 import sys
 import time
 from collections.abc import Iterator
@@ -296,3 +298,151 @@ def test_doctor_ros1(network: PrivateNetwork, ros1_robot: Watched) -> None:
     assert "set ROS_IP=198.18.1.10" in pinned.stdout and not any(
         line.startswith("ok ") for line in pinned.stdout.splitlines()
     )  # without --report, only what failed
+
+
+# --- links that drop and come back (Wi-Fi) --------------------------------------------------------------
+
+DROP_SECONDS = 4.0
+
+
+def numbers(out: str, prefix: str) -> list[int]:
+    """The N of every `<prefix> N` text in an echo's output or a bag's strings."""
+    return [int(n) for n in re.findall(rf"{prefix} (\d+)", out)]
+
+
+def bag_texts(bag: Path, topic: str) -> list[tuple[int, str]]:
+    """(receive time, data) of `topic`'s std_msgs/String messages, read by rosbags."""
+    from rosbags.highlevel import AnyReader
+    from rosbags.typesys import Stores, get_typestore
+
+    with AnyReader([bag], default_typestore=get_typestore(Stores.ROS2_JAZZY)) as reader:
+        conns = [c for c in reader.connections if c.topic == topic]
+        return [(stamp, reader.deserialize(data, conn.msgtype).data)
+                for conn, stamp, data in reader.messages(connections=conns)]  # fmt: skip
+
+
+def ride_out_a_drop(network: PrivateNetwork, runs: dict[str, Watched], echo: str, prefix: str) -> int:
+    """Drop the laptop's link for DROP_SECONDS once the echo has printed ten messages (two seconds: the
+    others are steady too), restore it, and wait until the echo prints a message sent after it came back;
+    the highest N seen before the drop."""
+    assert runs[echo].wait_for(lambda out: len(numbers(out, prefix)) >= 10, timeout=20), runs[echo].stdout
+    network.link(network.laptop, False)
+    try:
+        time.sleep(DROP_SECONDS)  # the drop itself is what is tested: a window, not an event
+        before = max(numbers(runs[echo].stdout, prefix))
+    finally:
+        network.link(network.laptop, True)
+    after = before + round(DROP_SECONDS * 5) + 5  # sent (at 5 Hz) after the link came back
+    assert runs[echo].wait_for(lambda out: max(numbers(out, prefix)) >= after, timeout=20), (
+        runs[echo].stdout[-500:] + runs[echo].stop()[1][-1000:]
+    )
+    return before
+
+
+def end_all(runs: dict[str, Watched]) -> dict[str, tuple[str, str]]:
+    return {name: run.stop(timeout=15) for name, run in runs.items()}
+
+
+def test_ros1_verbs_ride_out_a_link_drop(
+    network: PrivateNetwork, ros1_robot: Watched, tmp_path: Path
+) -> None:
+    """echo, hz and bag record on the laptop keep going across a 4 s drop of its link, and the recording
+    is whole, valid and says how long it heard nothing."""
+    env = laptop_env(ROS_MASTER_URI=f"http://{network.robot.address}:11311")
+    rostool = [sys.executable, "-m", "rostool", "--ros1"]
+    bag = tmp_path / "drop.bag"
+    verbs = {"echo": ["topic", "echo", "/robot_says"], "hz": ["topic", "hz", "/robot_says"],
+             "record": ["bag", "record", "-O", str(bag), "/robot_says"]}  # fmt: skip
+    runs = {name: Watched(network.laptop.popen([*rostool, *args], env)) for name, args in verbs.items()}
+    try:
+        before = ride_out_a_drop(network, runs, "echo", "robot")
+        assert runs["hz"].wait_for(lambda out: out.count("average rate") >= 6, timeout=10)
+    finally:
+        ended = end_all(runs)
+    recorded = bag_texts(bag, "/robot_says")
+    got = numbers(" ".join(text for _t, text in recorded), "robot")
+    assert got == list(range(got[0], got[-1] + 1)), got  # nothing lost: TCP held what the drop delayed
+    assert got[0] <= before < before + DROP_SECONDS * 5 < got[-1]
+    silences = [line for line in ended["record"][1].splitlines() if "heard nothing on /robot_says" in line]
+    assert len(silences) == 1, ended["record"][1]
+    seconds = float(re.search(r"for ([\d.]+) s", silences[0]).group(1))  # type: ignore[union-attr]
+    assert DROP_SECONDS - 1 <= seconds <= DROP_SECONDS + 3, silences
+
+
+def test_ros2_verbs_ride_out_a_link_drop(
+    network: PrivateNetwork, robots: dict[str, str], tmp_path: Path
+) -> None:
+    """The DDS backend's echo, hz and bag record on the laptop resume after a 4 s drop (well within the
+    robot's 20 s lease: the graph keeps it), and the recording says how long it heard nothing."""
+    rostool = [sys.executable, "-m", "rostool", "--ros2"]
+    bag = tmp_path / "drop"
+    verbs = {"echo": ["topic", "echo", "/chatter"], "hz": ["topic", "hz", "/chatter"],
+             "record": ["bag", "record", "-o", str(bag), "/chatter"]}  # fmt: skip
+    runs = {name: Watched(network.laptop.popen([*rostool, *args], robots)) for name, args in verbs.items()}
+    try:
+        ride_out_a_drop(network, runs, "echo", "hello")
+        listed = network.laptop.run([*rostool, "node", "list"], robots).stdout.split()
+        assert ROBOT_NODE in listed
+        assert runs["hz"].wait_for(lambda out: out.count("average rate") >= 6, timeout=10)
+    finally:
+        ended = end_all(runs)
+    recorded = bag_texts(bag, "/chatter")
+    got = numbers(" ".join(text for _t, text in recorded), "hello")
+    assert got and got == sorted(got) and got[-1] - got[0] > DROP_SECONDS * 5
+    silences = [line for line in ended["record"][1].splitlines() if "heard nothing on /chatter" in line]
+    assert len(silences) == 1, ended["record"][1]
+
+
+# --- ROS 2: every verb family from the laptop, on both backends -----------------------------------------
+
+TALKER_BAG = Path(__file__).resolve().parents[2] / "shared" / "testdata" / "ros2" / "talker_mcap"
+
+
+@pytest.fixture(scope="module")
+def robot_services(
+    network: PrivateNetwork, robots: dict[str, str], tmp_path_factory: pytest.TempPathFactory
+) -> Iterator[RclpyPeer]:
+    """A real rclpy node on the robot that listens, serves a SetBool service, parameters and an action."""
+    roles = ["--name", "robot_services", "--listen", "/laptop_says", "--listen", "/topic",
+             "--service", "/robot_switch", "--params", "--action", "/fibonacci"]  # fmt: skip
+    peer = RclpyPeer("jazzy", robots, tmp_path_factory.mktemp("robot_services"), roles, on=network.robot)
+    try:
+        peer.wait_for("ready")
+        yield peer
+    finally:
+        peer.stop()
+
+
+@pytest.mark.parametrize("backend", ["dds", "rclpy"])
+def test_ros2_verbs_across_the_link(
+    network: PrivateNetwork,
+    robots: dict[str, str],
+    robot_services: RclpyPeer,
+    tmp_path: Path,
+    backend: str,
+) -> None:
+    """pub, echo, hz, service call, param get, action send_goal and bag play from the laptop with ROS's
+    defaults, against the real node on the robot."""
+
+    def run(*args: str, timeout: float = 40) -> subprocess.CompletedProcess[str]:
+        if backend == "dds":
+            return network.laptop.run([sys.executable, "-m", "rostool", "--ros2", *args], robots, timeout)
+        rclpy_env = machine_peer_env(robots, tmp_path)
+        return network.laptop.run(rclpy_command(["--ros2", *args], "jazzy"), rclpy_env, timeout)
+
+    said = f"from the laptop ({backend})"
+    pub = run("topic", "pub", "--once", "/laptop_says", "std_msgs/msg/String", f"data: '{said}'")
+    assert pub.returncode == 0, pub.stderr
+    robot_services.wait_for("heard", lambda e: e["data"] == said)
+    echo = run("topic", "echo", "/chatter", "--once")
+    assert re.match(r"data: hello \d+\n---\n$", echo.stdout), echo.stdout + echo.stderr
+    call = run("service", "call", "/robot_switch", "std_srvs/srv/SetBool", "{data: true}")
+    assert "success=True" in call.stdout, call.stdout + call.stderr
+    param = run("param", "get", "/robot_services", "count")
+    assert param.stdout == "Integer value is: 3\n", param.stdout + param.stderr
+    goal = run("action", "send_goal", "/fibonacci", "test_msgs/action/Fibonacci", "{order: 3}")
+    assert "Goal finished with status: SUCCEEDED" in goal.stdout, goal.stdout + goal.stderr
+    play = run("bag", "play", str(TALKER_BAG))
+    assert play.returncode == 0, play.stderr
+    heard = robot_services.wait_for("heard", lambda e: e["topic"] == "/topic")
+    assert heard["data"] in {text for _t, text in bag_texts(TALKER_BAG / "talker.mcap", "/topic")}

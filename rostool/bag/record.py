@@ -33,6 +33,7 @@ from rostool.bag.record_options import (
     output_format,
     target_name,
 )
+from rostool.bag.record_silence import SilenceWatch
 from rostool.bag.record_sinks import Ros1Sink, Ros2Sink, Sink
 from rostool.bag.rosbag2_dir import Rosbag2DirSink
 from rostool.errors import RostoolError
@@ -144,6 +145,7 @@ class Recorder:
         self._split_waiters: list[threading.Event] = []  # set once the next file is started
         self.snapshots: list[int] = []  # messages written by each snapshot
         self.result = RecordResult()
+        self.silences = SilenceWatch()
         self._subscribed: set[str] = set()
         self._split_index = 0 if options.split else None
         self._sink: Sink | None = None
@@ -321,6 +323,7 @@ class Recorder:
         if self._file_start is None:
             self._file_start = stamp
         if sink.write(key, fields, stamp, payload):
+            self.silences.heard(topic, stamp)
             counts[topic] = counts.get(topic, 0) + 1
             self._written_bytes[topic] += len(payload)
             self._written_in_file += 1
@@ -462,6 +465,7 @@ class Recorder:
         if self._discover_error is not None:
             raise self._discover_error
         self.result.dropped = dict(self.queue.dropped)
+        self.result.silences = list(self.silences.found)
         if self._failure is not None:
             self.result.error = self._failure
         return self.result

@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Literal, cast
 
 from rostool.bag.formats import FORMATS, by_suffix
+from rostool.bag.record_silence import Silence
 from rostool.bag.record_sinks import active_name
 from rostool.bag.replace import check_replaceable
 from rostool.bag.rosbag2_dir import Rosbag2Layout
@@ -83,6 +84,7 @@ class RecordResult:
     dropped: dict[str, int] = field(default_factory=dict)
     skipped: dict[str, str] = field(default_factory=dict)  # topic -> why some messages were not written
     removed: list[Path] = field(default_factory=list)  # older split files deleted by --max-splits
+    silences: list[Silence] = field(default_factory=list)  # where a steady topic went quiet for a while
     error: str | None = None
 
     @property

@@ -1,6 +1,7 @@
 """`rostool doctor`: which ROS version, ROS 2 backend, RMW, distro, domain and discovery range a command
 would use, and why, then the network checks of that ROS version (roswtf's and `ros2 doctor`'s job): one
-line per failed check and exit 1, or `--report` for every check and fact."""
+line per failed check and exit 1, or `--report` for every check and fact. A group, as ros2 doctor's: its
+verbs (`hello`: doctor_hello.py) are imported only when run."""
 
 from __future__ import annotations
 
@@ -8,11 +9,22 @@ from typing import Any
 
 import click
 
-from rostool.commands._common import json_option, print_json, ros2_backend, ros_version
+from rostool.commands._common import ExtensibleGroup, json_option, print_json, ros2_backend, ros_version
 from rostool.graph.base import NetworkCheck
 
+EPILOG = """\b
+Examples:
+  rostool doctor                            # one line per failed check; exit 1 if any
+  rostool doctor --report                   # every check and fact
+  rostool --ros2-backend rclpy doctor --json
+  rostool doctor hello                      # on the laptop and on the robot: do they hear each other?
+"""
 
-@click.command("doctor")
+
+@click.group(
+    "doctor", cls=ExtensibleGroup, invoke_without_command=True, epilog=EPILOG,
+    extra={"hello": "rostool.commands.doctor_hello:hello"},
+)  # fmt: skip
 @click.option("--report", "full", is_flag=True, help="Every check and network fact, not only what failed.")
 @click.option("--listen", type=click.FloatRange(0, 30), default=None,
               help="ROS 2: seconds to listen for other machines' participants (3.2).")  # fmt: skip
@@ -26,12 +38,15 @@ def doctor(ctx: click.Context, full: bool, listen: float | None, as_json: bool) 
     announce participants on, listened to passively; a domain with nothing on it names the one in use.
     Each failed check is one line, and the exit status is 1. Opens no graph.
 
-    \b
-    Examples:
-      rostool doctor
-      rostool doctor --report
-      rostool --ros2-backend rclpy doctor --json
+    `rostool doctor hello` (ros2 doctor hello) checks that machines hear each other on a topic and by
+    UDP multicast.
     """
+    if ctx.invoked_subcommand is not None:
+        given = [flag for flag, used in (("--report", full), ("--listen", listen is not None),
+                                         ("--json", as_json)) if used]  # fmt: skip
+        if given:
+            raise click.UsageError(f"{', '.join(given)}: options of `rostool doctor` alone, not of its verbs")
+        return
     from rostool.errors import RostoolError
     from rostool.graph import network_checks, ros2_report, select_ros_version
 

@@ -1,7 +1,8 @@
 """`rostool multicast send|receive`: does UDP multicast pass between two machines? (ros2 multicast's verbs)
 
-The same group, port, datagram and lines as ros2multicast, so rostool and ros2 can be at either end. Only the
-standard library: nothing of ROS is imported.
+The same group, port, datagram and lines as ros2multicast, so rostool and ros2 can be at either end. The
+sockets are `rostool.graph.multicast`'s (shared with `doctor hello`): only the standard library, nothing of
+ROS.
 """
 
 from __future__ import annotations
@@ -9,17 +10,13 @@ from __future__ import annotations
 import contextlib
 import ipaddress
 import json
-import socket
-import struct
 
 import click
 
 from rostool.errors import RostoolError
+from rostool.graph.multicast import GROUP, PORT, joined_socket, send_datagram, sending_socket
 
-GROUP = "225.0.0.1"
-PORT = 49150
 GREETING = b"Hello World!"
-ROUTE_HINT = "is there a route for multicast (a default route or `ip route add 224.0.0.0/4 dev IFACE`)?"
 
 
 def _multicast_group(_ctx: click.Context, _param: click.Parameter, value: str) -> str:
@@ -51,18 +48,6 @@ def multicast() -> None:
     """
 
 
-def _outgoing_address(group: str) -> str:
-    """The local address the routing table picks for `group` (connecting a UDP socket sends nothing)."""
-    probe = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-    try:
-        probe.connect((group, 9))
-        return str(probe.getsockname()[0])
-    except OSError:
-        return "0.0.0.0"  # no route: sendto says so
-    finally:
-        probe.close()
-
-
 @multicast.command(
     epilog="""\b
 Examples:
@@ -78,40 +63,8 @@ Examples:
 def send(group: str, port: int, ttl: int | None) -> None:
     """Send one UDP multicast datagram, 'Hello World!'."""
     click.echo("Sending one UDP multicast datagram...")
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM, socket.IPPROTO_UDP) as sock:
-        if ttl is not None:
-            sock.setsockopt(socket.IPPROTO_IP, socket.IP_MULTICAST_TTL, ttl)
-        source = socket.inet_aton(_outgoing_address(group))
-        sock.setsockopt(socket.IPPROTO_IP, socket.IP_MULTICAST_IF, source)
-        try:
-            sock.sendto(GREETING, (group, port))
-        except OSError as err:
-            problem = err.strerror or str(err)
-            raise RostoolError(f"cannot send to {group}:{port}: {problem}; {ROUTE_HINT}") from None
-
-
-def _joined_socket(group: str, port: int) -> socket.socket:
-    """A UDP socket on `port` (shared, as ros2's) that joined `group` on the interface of its route."""
-    sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM, socket.IPPROTO_UDP)
-    try:
-        sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
-        if hasattr(socket, "SO_REUSEPORT"):
-            sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEPORT, 1)
-        try:
-            sock.bind(("", port))
-        except OSError as err:
-            problem = err.strerror or str(err)
-            raise RostoolError(f"cannot listen on UDP port {port}: {problem}; another program may hold it: "
-                               "choose another --port on both ends") from None  # fmt: skip
-        membership = struct.pack("4s4s", socket.inet_aton(group), socket.inet_aton("0.0.0.0"))
-        try:
-            sock.setsockopt(socket.IPPROTO_IP, socket.IP_ADD_MEMBERSHIP, membership)
-        except OSError as err:
-            raise RostoolError(f"cannot join {group}: {err.strerror or err}; {ROUTE_HINT}") from None
-    except BaseException:
-        sock.close()
-        raise
-    return sock
+    with sending_socket(group, ttl) as sock:
+        send_datagram(sock, GREETING, group, port)
 
 
 @multicast.command(
@@ -132,7 +85,7 @@ Examples:
 @click.option("--json", "as_json", is_flag=True, help="Print the datagram as one JSON object for scripts.")
 def receive(group: str, port: int, timeout: float | None, as_json: bool) -> None:
     """Wait for one UDP multicast datagram and print who sent it and what it says."""
-    with _joined_socket(group, port) as sock:
+    with joined_socket(group, port) as sock:
         click.echo("Waiting for UDP multicast datagram...", err=as_json)
         sock.settimeout(timeout)
         try:

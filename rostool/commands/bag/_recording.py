@@ -8,6 +8,7 @@ import dataclasses
 import os
 import sys
 import threading
+import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Literal
@@ -148,6 +149,10 @@ def _report(result: RecordResult, request: RecordRequest, warn: Callable[[str], 
         warn(f"dropped {count} messages on {topic}: the disk could not keep up (raise {cache})")
     for topic, why in sorted(result.skipped.items()):
         warn(f"some messages on {topic} were not written: {why}")
+    for silence in result.silences:  # e.g. a Wi-Fi link that dropped: the bag is whole, but has a hole
+        began = time.strftime("%H:%M:%S", time.localtime(silence.start_ns / 1e9))
+        warn(f"heard nothing on {silence.topic} for {silence.seconds:.1f} s from {began} (a link or the "
+             "publisher was down); the recording goes on either side")  # fmt: skip
     if result.error is not None:
         kept = f"; what was recorded before is in {', '.join(map(str, result.files))}" if result.files else ""
         raise RostoolError(f"recording stopped: {result.error}{kept}")

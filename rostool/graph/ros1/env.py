@@ -33,7 +33,6 @@ def is_loopback(host: str) -> bool:
     return host in ("localhost", "::1") or host.startswith("127.")
 
 
-
 def advertised_host() -> str:
     """The host name peers use to reach us: ROS_HOSTNAME, else ROS_IP; else 127.0.0.1 for a master on
     loopback; else this machine's name, as rospy does, unless that name cannot take other machines back

@@ -10,6 +10,7 @@ vendor id and the sender's 12-byte GUID prefix, which is all this module reads."
 from __future__ import annotations
 
 import contextlib
+import os
 import select
 import socket
 import struct
@@ -43,19 +44,41 @@ class Heard:
 
 
 def local_domains(proc: Path = Path("/proc/net")) -> dict[int, int]:
-    """Domain -> how many participants of this machine (this network namespace) hold its unicast discovery
-    ports, from /proc/net/udp and udp6."""
-    held: dict[int, set[int]] = defaultdict(set)
+    """Domain -> how many participants of this machine (this network namespace) use it, from the UDP ports
+    in /proc/net/udp and udp6: a participant holds a pair of ports, discovery and data (7410 + 250 D + 2 p
+    and the next; with SUBNET also the domain's multicast pair 7400 + 250 D and the next). Only pairs count:
+    a lone ephemeral port (Cyclone's without a participant index, any socket's) lands among them at random.
+    This process's own sockets are left out."""
+    own = _own_socket_inodes()
+    ports: set[int] = set()
     for name in ("udp", "udp6"):
         with contextlib.suppress(OSError), open(proc / name, encoding="ascii") as table:
             next(table, None)
             for line in table:
-                local = line.split()[1]
-                port = int(local.rsplit(":", 1)[1], 16) - PORT_BASE
-                domain, offset = divmod(port, DOMAIN_GAIN)
-                if port >= 0 and domain <= DOMAIN_ID_MAX and offset >= UNICAST_OFFSET and offset % 2 == 0:
-                    held[domain].add((offset - UNICAST_OFFSET) // 2)
-    return {domain: len(indexes) for domain, indexes in sorted(held.items())}
+                fields = line.split()
+                if len(fields) > 9 and fields[9] not in own:
+                    ports.add(int(fields[1].rsplit(":", 1)[1], 16))
+    held: dict[int, set[int]] = defaultdict(set)
+    for port in ports:
+        domain, offset = divmod(port - PORT_BASE, DOMAIN_GAIN)
+        if port < PORT_BASE or domain > DOMAIN_ID_MAX or offset % 2 or port + 1 not in ports:
+            continue
+        if offset >= UNICAST_OFFSET:
+            held[domain].add((offset - UNICAST_OFFSET) // 2)
+        elif offset == 0:
+            held.setdefault(domain, set())
+    return {domain: max(1, len(indexes)) for domain, indexes in sorted(held.items())}
+
+
+def _own_socket_inodes() -> set[str]:
+    inodes = set()
+    with contextlib.suppress(OSError):
+        for fd in os.listdir("/proc/self/fd"):
+            with contextlib.suppress(OSError):
+                target = os.readlink(f"/proc/self/fd/{fd}")
+                if target.startswith("socket:["):
+                    inodes.add(target[8:-1])
+    return inodes
 
 
 def other_domain_hint(domain: int) -> str:
