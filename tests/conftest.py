@@ -53,6 +53,7 @@ LONG_MODULES = {
     "test_lifecycle",
     "test_daemon",
     "test_console",
+    "test_across_machines",
 }
 
 

@@ -15,7 +15,7 @@ import re
 import subprocess
 import sys
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
@@ -101,13 +101,19 @@ def referee_view(network: PrivateNetwork, env: dict[str, str], tmp_path: Path, s
         referee.stop()
 
 
+def laptop_command(
+    backend: str, args: list[str], env: dict[str, str], tmp_path: Path
+) -> tuple[list[str], dict[str, str]]:
+    """`rostool --ros2 ARGS` on one backend as a user on the laptop runs it: rostool's DDS in the test
+    venv, or rclpy (Jazzy, Fast DDS with ROS's defaults) in the peer venv; the command and its env."""
+    if backend == "dds":
+        return [sys.executable, "-m", "rostool", "--ros2", *args], env
+    return rclpy_command(["--ros2", *args], "jazzy"), machine_peer_env(env, tmp_path)
+
+
 def laptop_listing(network: PrivateNetwork, env: dict[str, str], tmp_path: Path, backend: str) -> set[str]:
     """The robot nodes `rostool --ros2 node list` on the laptop lists, on one backend."""
-    if backend == "dds":
-        listing = network.laptop.run([sys.executable, "-m", "rostool", "--ros2", "node", "list"], env)
-    else:
-        listing = network.laptop.run(rclpy_command(["--ros2", "node", "list"], "jazzy"),
-                                     machine_peer_env(env, tmp_path))  # fmt: skip
+    listing = network.laptop.run(*laptop_command(backend, ["node", "list"], env, tmp_path))
     return robot_nodes(listing.stdout.split())
 
 
@@ -321,14 +327,25 @@ def bag_texts(bag: Path, topic: str) -> list[tuple[int, str]]:
                 for conn, stamp, data in reader.messages(connections=conns)]  # fmt: skip
 
 
-def ride_out_a_drop(network: PrivateNetwork, runs: dict[str, Watched], echo: str, prefix: str) -> int:
-    """Drop the laptop's link for DROP_SECONDS once the echo has printed ten messages (two seconds: the
-    others are steady too), restore it, and wait until the echo prints a message sent after it came back;
-    the highest N seen before the drop."""
+def ride_out_a_drop(
+    network: PrivateNetwork,
+    runs: dict[str, Watched],
+    echo: str,
+    prefix: str,
+    during: Callable[[], None] = lambda: None,
+) -> int:
+    """Drop the laptop's link for DROP_SECONDS once the echo has printed ten messages and hz three rates,
+    restore it, and wait until the echo prints a message sent after it came back; the highest N seen before
+    the drop."""
     assert runs[echo].wait_for(lambda out: len(numbers(out, prefix)) >= 10, timeout=20), runs[echo].stdout
+    # hz, started with the recorder on the same backend, has measured for 3 s: the recorder's subscription
+    # (made as late) has been taking messages as long, so it knows the topic was steady before the drop
+    assert runs["hz"].wait_for(lambda out: out.count("average rate") >= 3, timeout=20), runs["hz"].stdout
     network.link(network.laptop, False)
     try:
-        time.sleep(DROP_SECONDS)  # the drop itself is what is tested: a window, not an event
+        began = time.monotonic()
+        during()
+        time.sleep(max(0.0, DROP_SECONDS - (time.monotonic() - began)))  # the drop is what is tested
         before = max(numbers(runs[echo].stdout, prefix))
     finally:
         network.link(network.laptop, True)
@@ -366,26 +383,43 @@ def test_ros1_verbs_ride_out_a_link_drop(
     silences = [line for line in ended["record"][1].splitlines() if "heard nothing on /robot_says" in line]
     assert len(silences) == 1, ended["record"][1]
     seconds = float(re.search(r"for ([\d.]+) s", silences[0]).group(1))  # type: ignore[union-attr]
-    assert DROP_SECONDS - 1 <= seconds <= DROP_SECONDS + 3, silences
+    # TCP's retransmission timer backed off during the drop (0.2, 0.4, ... 3.2 s): the backlog comes when it
+    # next fires, up to a few seconds after the link is back
+    assert DROP_SECONDS - 1 <= seconds <= DROP_SECONDS + 6, silences
 
 
+@pytest.mark.parametrize("backend", ["dds", "rclpy"])
 def test_ros2_verbs_ride_out_a_link_drop(
-    network: PrivateNetwork, robots: dict[str, str], tmp_path: Path
+    network: PrivateNetwork, robots: dict[str, str], tmp_path: Path, backend: str
 ) -> None:
-    """The DDS backend's echo, hz and bag record on the laptop resume after a 4 s drop (well within the
-    robot's 20 s lease: the graph keeps it), and the recording says how long it heard nothing."""
-    rostool = [sys.executable, "-m", "rostool", "--ros2"]
+    """echo, hz and bag record on the laptop resume after a 4 s drop, and the recording says how long it
+    heard nothing; the graph daemon keeps the robot throughout (well within its 20 s lease)."""
+    served = {**robots, "ROSTOOL_NO_DAEMON": "", "ROSTOOL_RUNTIME_DIR": str(tmp_path / "run")}
+
+    def run(*args: str) -> subprocess.CompletedProcess[str]:
+        return network.laptop.run(*laptop_command(backend, list(args), served, tmp_path))
+
+    def daemon_lists_the_robot() -> None:
+        assert ROBOT_NODE in run("node", "list").stdout.split()
+
     bag = tmp_path / "drop"
     verbs = {"echo": ["topic", "echo", "/chatter"], "hz": ["topic", "hz", "/chatter"],
              "record": ["bag", "record", "-o", str(bag), "/chatter"]}  # fmt: skip
-    runs = {name: Watched(network.laptop.popen([*rostool, *args], robots)) for name, args in verbs.items()}
+    assert run("daemon", "start").returncode == 0
     try:
-        ride_out_a_drop(network, runs, "echo", "hello")
-        listed = network.laptop.run([*rostool, "node", "list"], robots).stdout.split()
-        assert ROBOT_NODE in listed
-        assert runs["hz"].wait_for(lambda out: out.count("average rate") >= 6, timeout=10)
+        daemon_lists_the_robot()
+        runs = {name: Watched(network.laptop.popen(*laptop_command(backend, args, robots, tmp_path)))
+                for name, args in verbs.items()}  # fmt: skip
+        try:
+            ride_out_a_drop(network, runs, "echo", "hello", during=daemon_lists_the_robot)
+            daemon_lists_the_robot()
+            assert runs["hz"].wait_for(lambda out: out.count("average rate") >= 6, timeout=10)
+        finally:
+            ended = end_all(runs)
+        status = json.loads(run("daemon", "status", "--json").stdout)
+        assert status["running"] and status["queries"] >= 3, status  # the listings were the daemon's
     finally:
-        ended = end_all(runs)
+        run("daemon", "stop")
     recorded = bag_texts(bag, "/chatter")
     got = numbers(" ".join(text for _t, text in recorded), "hello")
     assert got and got == sorted(got) and got[-1] - got[0] > DROP_SECONDS * 5
@@ -425,10 +459,7 @@ def test_ros2_verbs_across_the_link(
     defaults, against the real node on the robot."""
 
     def run(*args: str, timeout: float = 40) -> subprocess.CompletedProcess[str]:
-        if backend == "dds":
-            return network.laptop.run([sys.executable, "-m", "rostool", "--ros2", *args], robots, timeout)
-        rclpy_env = machine_peer_env(robots, tmp_path)
-        return network.laptop.run(rclpy_command(["--ros2", *args], "jazzy"), rclpy_env, timeout)
+        return network.laptop.run(*laptop_command(backend, list(args), robots, tmp_path), timeout=timeout)
 
     said = f"from the laptop ({backend})"
     pub = run("topic", "pub", "--once", "/laptop_says", "std_msgs/msg/String", f"data: '{said}'")

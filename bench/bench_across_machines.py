@@ -1,0 +1,314 @@
+"""Across machines: `topic hz` at 1 kHz and `topic echo` of a 0.92 MB image, rostool beside the real tool
+(ros2cli Jazzy; Debian's rostopic), on a laptop, from a publisher on a robot. Both are private network
+namespaces (tests/netns.py), so ROS's defaults (multicast, SUBNET discovery) run there and nothing touches
+the host's own interfaces.
+
+    .venv/bin/python bench/bench_across_machines.py [hz|echo]... [--ros 1|2|both] [--seconds S] [--json]
+
+Needs root (ip netns). ROS 2: a real rclpy Jazzy node on the robot (tests/rclpy_peer.py at 1 kHz, an inline
+rclpy camera at 30 Hz); rostool on its DDS backend without its graph daemon (ROSTOOL_NO_DAEMON=1, so its
+process does all the work); `ros2` with its daemon started beforehand on the laptop, as a user's is. ROS 1:
+Debian's rosmaster and a rospy publisher on the robot (ROS_IP: the robot), both tools with ROS_IP set to the
+laptop. The two tools of a pair start together and run for the same window; CPU is each process's
+user+system time at the end of the window (start-up included).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import re
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from pathlib import Path
+from typing import Any
+
+from _graph import VENV_PYTHON, cpu_seconds
+
+from tests.netns import Machine, PrivateNetwork, netns_missing, private_network
+from tests.ros2_peers import PEERS_DIR, PEER_SCRIPT, machine_peer_env
+from tests.support import DEBIAN_PYTHON, debian_env, fresh_domain, wait_until
+
+JAZZY = PEERS_DIR / "jazzy"
+ROS2 = JAZZY / "bin" / "ros2"
+WIDTH, HEIGHT = 640, 480  # rgb8: 921,600 bytes of data
+
+# a camera: sensor_msgs/Image 640x480 rgb8 at RATE Hz, its number N in header.frame_id ("frame N"); prints
+# {"count": N, "t": monotonic} about once a second
+ROS2_CAMERA = r"""
+import array, json, sys, time
+import rclpy
+from rclpy.executors import ExternalShutdownException
+from sensor_msgs.msg import Image
+rclpy.init()
+node = rclpy.create_node("camera")
+pub = node.create_publisher(Image, "/image", 10)
+msg = Image(height=480, width=640, encoding="rgb8", step=640 * 3)
+msg.data = array.array("B", bytes(640 * 480 * 3))
+state = {"count": 0, "reported": time.monotonic()}
+def tick():
+    state["count"] += 1
+    msg.header.stamp = node.get_clock().now().to_msg()
+    msg.header.frame_id = "frame %d" % state["count"]
+    pub.publish(msg)
+    now = time.monotonic()
+    if now - state["reported"] >= 1.0:
+        state["reported"] = now
+        print(json.dumps({"count": state["count"], "t": now}), flush=True)
+node.create_timer(1.0 / float(sys.argv[1]), tick)
+print("ready", flush=True)
+try:
+    rclpy.spin(node)
+except (KeyboardInterrupt, ExternalShutdownException):
+    pass
+"""
+
+# rospy: /fast std_msgs/String or /image (as ROS2_CAMERA) at RATE Hz on an absolute schedule; same reports
+ROS1_PUBLISHER = r"""
+import json, sys, time, rospy
+from std_msgs.msg import String
+from sensor_msgs.msg import Image
+kind, rate = sys.argv[1], float(sys.argv[2])
+rospy.init_node("robot_pub")
+if kind == "image":
+    pub = rospy.Publisher("/image", Image, queue_size=5)
+    msg = Image(height=480, width=640, encoding="rgb8", step=640 * 3, data=bytes(640 * 480 * 3))
+else:
+    pub = rospy.Publisher("/fast", String, queue_size=100)
+    msg = String()
+print("ready", flush=True)
+start = reported = time.monotonic()
+count = 0
+while not rospy.is_shutdown():
+    count += 1
+    if kind == "image":
+        msg.header.stamp = rospy.Time.now()
+        msg.header.frame_id = "frame %d" % count
+    else:
+        msg.data = "hello %d" % count
+    pub.publish(msg)
+    now = time.monotonic()
+    if now - reported >= 1.0:
+        reported = now
+        print(json.dumps({"count": count, "t": now}), flush=True)
+    delay = start + count / rate - time.monotonic()
+    if delay > 0:
+        time.sleep(delay)
+"""
+
+
+class Run:
+    """A process on a private machine whose stdout lines are kept as they come."""
+
+    def __init__(self, machine: Machine, argv: list[str], env: dict[str, str]) -> None:
+        self.proc = machine.popen(argv, env, stderr=subprocess.DEVNULL)
+        self.lines: list[str] = []
+        self.reader = threading.Thread(target=self._read, daemon=True)
+        self.reader.start()
+
+    def _read(self) -> None:
+        assert self.proc.stdout is not None
+        for line in self.proc.stdout:
+            self.lines.append(line.rstrip("\n"))
+
+    def wait_for(self, text: str, timeout: float = 30) -> None:
+        if not wait_until(lambda: text in self.lines or self.proc.poll() is not None, timeout):
+            raise SystemExit(f"{self.proc.args[-3:]} did not print {text!r} within {timeout} s")
+        if text not in self.lines:
+            raise SystemExit(f"{self.proc.args[-3:]} ended (exit {self.proc.returncode}) before {text!r}")
+
+    def reports(self) -> list[tuple[int, float]]:
+        """A publisher's (count, monotonic time) reports."""
+        return [(e["count"], e["t"]) for e in (json.loads(line) for line in self.lines if line.startswith("{"))]
+
+    def stop(self) -> float:
+        """Its CPU seconds so far, then interrupt it (killed after 10 s) and wait for its output."""
+        cpu = cpu_seconds(self.proc.pid) if self.proc.poll() is None else float("nan")
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGINT)
+            try:
+                self.proc.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait()
+        self.reader.join(timeout=10)
+        return cpu
+
+
+def true_rate(reports: list[tuple[int, float]], start: float, end: float) -> float:
+    """The publisher's own rate over the reports that fell in [start, end]."""
+    inside = [r for r in reports if start <= r[1] <= end] or reports
+    (c0, t0), (c1, t1) = inside[0], inside[-1]
+    return (c1 - c0) / (t1 - t0) if t1 > t0 else float("nan")
+
+
+def hz_result(run: Run, cpu: float, rate: float) -> dict[str, Any]:
+    rates = re.findall(r"average rate: ([\d.]+)", "\n".join(run.lines))
+    seen = float(rates[-1]) if rates else float("nan")
+    return {"rate": seen, "error_pct": 100 * abs(seen - rate) / rate, "cpu_s": cpu, "reports": len(rates)}
+
+
+def echo_result(run: Run, cpu: float, rate: float) -> dict[str, Any]:
+    """Messages printed; by their numbers, how many of the publisher's between the first and the last
+    printed were missing; msgs/s = printed / (that span at the publisher's rate)."""
+    text = "\n".join(run.lines)
+    numbers = [int(n) for n in re.findall(r"frame (\d+)", text)]
+    span = numbers[-1] - numbers[0] + 1 if numbers else 0
+    got = len(set(numbers))
+    return {"messages": sum(line.strip() == "---" for line in run.lines), "numbered": got,
+            "missing": span - got, "msgs_per_s": got / (span / rate) if span > 1 else 0.0, "cpu_s": cpu}  # fmt: skip
+
+
+def side_by_side(machine: Machine, tools: dict[str, tuple[list[str], dict[str, str]]], publisher: Run | Any,
+                 seconds: float) -> tuple[dict[str, tuple[Run, float]], float]:  # fmt: skip
+    """Both tools started together, each stopped after `seconds`; their runs and CPU, and the publisher's
+    true rate over the window."""
+    began = time.monotonic()
+    runs = {name: Run(machine, argv, env) for name, (argv, env) in tools.items()}
+    time.sleep(seconds)
+    ended = time.monotonic()
+    cpus = {name: run.stop() for name, run in runs.items()}
+    reports = publisher.reports() if isinstance(publisher, Run) else [
+        (e["count"], e["t"]) for e in publisher.of("published")]  # fmt: skip
+    return {name: (run, cpus[name]) for name, run in runs.items()}, true_rate(reports, began, ended)
+
+
+def bench_ros2(net: PrivateNetwork, what: list[str], seconds: float, tmp: Path) -> dict[str, Any]:
+    from tests.ros2_peers import RclpyPeer
+
+    base = {k: v for k, v in os.environ.items() if not k.startswith("ROS") and k != "CYCLONEDDS_URI"}
+    base.update(PYTHONUNBUFFERED="1", ROSTOOL_NO_DAEMON="1", ROS_DOMAIN_ID=str(fresh_domain()))
+    peer = machine_peer_env(base, tmp)
+    ros2_env = dict(peer, AMENT_PREFIX_PATH=str(JAZZY), PATH=f"{JAZZY}/bin:{peer['PATH']}")
+    ours = [VENV_PYTHON, "-m", "rostool", "--ros2", "topic"]
+    net.laptop.run([str(ROS2), "daemon", "start"], ros2_env)
+    results: dict[str, Any] = {}
+    try:
+        if "hz" in what:
+            talker = RclpyPeer("jazzy", base, tmp, ["--name", "fast", "--talk", "/fast", "--rate", "1000"],
+                               on=net.robot)  # fmt: skip
+            try:
+                talker.wait_for("ready", timeout=30)
+                runs, rate = side_by_side(net.laptop, {"rostool": ([*ours, "hz", "/fast"], base),
+                                          "real": ([str(ROS2), "topic", "hz", "/fast"], ros2_env)}, talker, seconds)  # fmt: skip
+            finally:
+                talker.stop()
+            results["hz"] = {"true_rate": rate, **{k: hz_result(r, c, rate) for k, (r, c) in runs.items()}}
+        if "echo" in what:
+            camera = Run(net.robot, [str(JAZZY / "bin" / "python"), "-c", ROS2_CAMERA, "30"], peer)
+            try:
+                camera.wait_for("ready")
+                runs, rate = side_by_side(net.laptop, {"rostool": ([*ours, "echo", "/image", "--no-arr"], base),
+                                          "real": ([str(ROS2), "topic", "echo", "/image", "--no-arr"], ros2_env)},
+                                          camera, seconds)  # fmt: skip
+            finally:
+                camera.stop()
+            results["echo"] = {"true_rate": rate, **{k: echo_result(r, c, rate) for k, (r, c) in runs.items()}}
+    finally:
+        net.laptop.run([str(ROS2), "daemon", "stop"], ros2_env)
+    return results
+
+
+def bench_ros1(net: PrivateNetwork, what: list[str], seconds: float, tmp: Path) -> dict[str, Any]:
+    base = {k: v for k, v in os.environ.items() if not k.startswith("ROS")}
+    base.update(PYTHONUNBUFFERED="1", ROS_MASTER_URI=f"http://{net.robot.address}:11311",
+                ROS_HOME=str(tmp), ROS_LOG_DIR=str(tmp))  # fmt: skip
+    robot = debian_env({**base, "ROS_IP": net.robot.address})
+    laptop = {**base, "ROS_IP": net.laptop.address}
+    master = net.robot.popen(["rosmaster", "--core", "-p", "11311"], robot, stdout=subprocess.DEVNULL,
+                             stderr=subprocess.DEVNULL)  # fmt: skip
+    ours = [VENV_PYTHON, "-m", "rostool", "--ros1", "topic"]
+    results: dict[str, Any] = {}
+    try:
+        if not wait_until(lambda: net.robot.run(["rosnode", "list"], robot, timeout=10).returncode == 0, 20):
+            raise SystemExit("rosmaster did not start on the robot")
+        for kind in what:
+            topic, hz = ("/fast", 1000) if kind == "hz" else ("/image", 30)
+            pub = Run(net.robot, [DEBIAN_PYTHON, "-c", ROS1_PUBLISHER, "image" if kind == "echo" else "string",
+                                  str(hz)], robot)  # fmt: skip
+            flags = [] if kind == "hz" else ["--noarr"]
+            try:
+                pub.wait_for("ready")
+                runs, rate = side_by_side(net.laptop, {"rostool": ([*ours, kind, topic, *flags], laptop),
+                                          "real": (["rostopic", kind, topic, *flags], debian_env(laptop))},
+                                          pub, seconds)  # fmt: skip
+            finally:
+                pub.stop()
+            result = hz_result if kind == "hz" else echo_result
+            results[kind] = {"true_rate": rate, **{k: result(r, c, rate) for k, (r, c) in runs.items()}}
+    finally:
+        master.send_signal(signal.SIGINT)
+        try:
+            master.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            master.kill()
+    return results
+
+
+def ratio(ours: float, real: float) -> str:
+    return f"{ours / real:.2f}" if real and real == real and ours == ours else "—"
+
+
+def table(summary: dict[str, Any]) -> str:
+    rows = ["| scenario | rostool | real tool | ratio |", "|---|---|---|---|"]
+    for ros, real_name in (("ros2", "ros2"), ("ros1", "rostopic")):
+        for kind, got in summary.get(ros, {}).items():
+            ours, real = got["rostool"], got["real"]
+            name = f"{ros.upper()[:3]} {ros[-1]} `topic {kind}` ({real_name})"
+            if kind == "hz":
+                rows.append(f"| {name}: rate error vs {got['true_rate']:.1f} Hz sent | {ours['error_pct']:.2f} % "
+                            f"({ours['rate']:.1f} Hz) | {real['error_pct']:.2f} % ({real['rate']:.1f} Hz) | "
+                            f"{ratio(ours['error_pct'], real['error_pct'])} |")  # fmt: skip
+            else:
+                rows.append(f"| {name}: msgs/s of {got['true_rate']:.1f} sent (printed, missing) | "
+                            f"{ours['msgs_per_s']:.1f} ({ours['messages']}, {ours['missing']}) | "
+                            f"{real['msgs_per_s']:.1f} ({real['messages']}, {real['missing']}) | "
+                            f"{ratio(ours['msgs_per_s'], real['msgs_per_s'])} |")  # fmt: skip
+            rows.append(f"| {name}: CPU s | {ours['cpu_s']:.2f} | {real['cpu_s']:.2f} | "
+                        f"{ratio(ours['cpu_s'], real['cpu_s'])} |")  # fmt: skip
+    return "\n".join(rows)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("what", nargs="*", choices=("hz", "echo"), default=["hz", "echo"])
+    parser.add_argument("--ros", choices=("1", "2", "both"), default="both")
+    parser.add_argument("--seconds", type=float, default=8.0)
+    parser.add_argument("--json", action="store_true", help="print a JSON summary instead of the table")
+    args = parser.parse_args()
+    what = [w for w in ("hz", "echo") if w in (args.what or ["hz", "echo"])]
+    if os.geteuid() != 0:
+        sys.exit("bench_across_machines.py needs root: it makes network namespaces (ip netns)")
+    reason = netns_missing()
+    if reason:
+        sys.exit(f"bench_across_machines.py: no private machines here: {reason}")
+    if args.ros != "1" and not (ROS2.exists() and PEER_SCRIPT.exists()):
+        sys.exit(f"the real ros2 (ros2cli Jazzy) is missing at {ROS2}: run ./test.sh")
+    if args.ros != "2" and not (shutil.which("rosmaster") and shutil.which("rostopic")):
+        sys.exit("Debian's ROS 1 (rosmaster, rostopic) is missing: run ./test.sh as root")
+    tmp = Path(tempfile.mkdtemp(prefix="rostool-bench-machines-"))
+    summary: dict[str, Any] = {"seconds": args.seconds, "cores": os.cpu_count()}
+    try:
+        with private_network() as net:
+            if args.ros in ("2", "both"):
+                summary["ros2"] = bench_ros2(net, what, args.seconds, tmp)
+            if args.ros in ("1", "both"):
+                summary["ros1"] = bench_ros1(net, what, args.seconds, tmp)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    summary["load_average"] = os.getloadavg()[0]
+    if args.json:
+        print(json.dumps(summary, indent=1))
+    else:
+        print(table(summary))
+        print(f"window {args.seconds:g} s per pair; load average at end {summary['load_average']:.1f}")
+
+
+if __name__ == "__main__":
+    main()
