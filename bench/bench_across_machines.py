@@ -5,12 +5,14 @@ the host's own interfaces.
 
     .venv/bin/python bench/bench_across_machines.py [hz|echo]... [--ros 1|2|both] [--seconds S] [--json]
 
-Needs root (ip netns). ROS 2: a real rclpy Jazzy node on the robot (tests/rclpy_peer.py at 1 kHz, an inline
-rclpy camera at 30 Hz); rostool on its DDS backend without its graph daemon (ROSTOOL_NO_DAEMON=1, so its
-process does all the work); `ros2` with its daemon started beforehand on the laptop, as a user's is. ROS 1:
-Debian's rosmaster and a rospy publisher on the robot (ROS_IP: the robot), both tools with ROS_IP set to the
-laptop. The two tools of a pair start together and run for the same window; CPU is each process's
-user+system time at the end of the window (start-up included).
+Needs root (ip netns). ROS 2: a real rclpy Jazzy node on the robot (the peer venv's python, publishing on
+an absolute schedule: tests/rclpy_peer.py's timer holds only ~945 Hz of 1 kHz here); rostool on its DDS
+backend without its graph daemon (ROSTOOL_NO_DAEMON=1, so its process does all the work); `ros2` with its
+daemon started beforehand on the laptop, as a user's is. ROS 1: Debian's rosmaster and a rospy publisher on
+the robot (ROS_IP: the robot), both tools with ROS_IP set to the laptop. The two tools of a pair start
+together and run for the same window; CPU is each process's user+system time at the end of the window
+(start-up included). echo: each image carries its number ("frame N" in header.frame_id), so the messages a
+tool missed between the first and the last it printed are counted exactly.
 """
 
 from __future__ import annotations
@@ -32,44 +34,53 @@ from typing import Any
 from _graph import VENV_PYTHON, cpu_seconds
 
 from tests.netns import Machine, PrivateNetwork, netns_missing, private_network
-from tests.ros2_peers import PEERS_DIR, PEER_SCRIPT, machine_peer_env
+from tests.ros2_peers import PEERS_DIR, machine_peer_env
 from tests.support import DEBIAN_PYTHON, debian_env, fresh_domain, wait_until
 
 JAZZY = PEERS_DIR / "jazzy"
 ROS2 = JAZZY / "bin" / "ros2"
-WIDTH, HEIGHT = 640, 480  # rgb8: 921,600 bytes of data
 
-# a camera: sensor_msgs/Image 640x480 rgb8 at RATE Hz, its number N in header.frame_id ("frame N"); prints
-# {"count": N, "t": monotonic} about once a second
-ROS2_CAMERA = r"""
+# rclpy: /fast std_msgs/String or /image sensor_msgs/Image 640x480 rgb8 (its number N in header.frame_id:
+# "frame N") at RATE Hz on an absolute schedule; prints {"count": N, "t": monotonic} about once a second
+ROS2_PUBLISHER = r"""
 import array, json, sys, time
 import rclpy
-from rclpy.executors import ExternalShutdownException
 from sensor_msgs.msg import Image
+from std_msgs.msg import String
+kind, rate = sys.argv[1], float(sys.argv[2])
 rclpy.init()
-node = rclpy.create_node("camera")
-pub = node.create_publisher(Image, "/image", 10)
-msg = Image(height=480, width=640, encoding="rgb8", step=640 * 3)
-msg.data = array.array("B", bytes(640 * 480 * 3))
-state = {"count": 0, "reported": time.monotonic()}
-def tick():
-    state["count"] += 1
-    msg.header.stamp = node.get_clock().now().to_msg()
-    msg.header.frame_id = "frame %d" % state["count"]
-    pub.publish(msg)
-    now = time.monotonic()
-    if now - state["reported"] >= 1.0:
-        state["reported"] = now
-        print(json.dumps({"count": state["count"], "t": now}), flush=True)
-node.create_timer(1.0 / float(sys.argv[1]), tick)
+node = rclpy.create_node("robot_pub")
+if kind == "image":
+    pub = node.create_publisher(Image, "/image", 10)
+    msg = Image(height=480, width=640, encoding="rgb8", step=640 * 3)
+    msg.data = array.array("B", bytes(640 * 480 * 3))
+else:
+    pub = node.create_publisher(String, "/fast", 10)
+    msg = String()
 print("ready", flush=True)
+start = reported = time.monotonic()
+count = 0
 try:
-    rclpy.spin(node)
-except (KeyboardInterrupt, ExternalShutdownException):
+    while rclpy.ok():
+        count += 1
+        if kind == "image":
+            msg.header.stamp = node.get_clock().now().to_msg()
+            msg.header.frame_id = "frame %d" % count
+        else:
+            msg.data = "hello %d" % count
+        pub.publish(msg)
+        now = time.monotonic()
+        if now - reported >= 1.0:
+            reported = now
+            print(json.dumps({"count": count, "t": now}), flush=True)
+        delay = start + count / rate - time.monotonic()
+        if delay > 0:
+            time.sleep(delay)
+except KeyboardInterrupt:
     pass
 """
 
-# rospy: /fast std_msgs/String or /image (as ROS2_CAMERA) at RATE Hz on an absolute schedule; same reports
+# the same with rospy (header.seq aside, the same messages)
 ROS1_PUBLISHER = r"""
 import json, sys, time, rospy
 from std_msgs.msg import String
@@ -107,15 +118,17 @@ class Run:
     """A process on a private machine whose stdout lines are kept as they come."""
 
     def __init__(self, machine: Machine, argv: list[str], env: dict[str, str]) -> None:
-        self.proc = machine.popen(argv, env, stderr=subprocess.DEVNULL)
+        self.proc = machine.popen(argv, env)
         self.lines: list[str] = []
-        self.reader = threading.Thread(target=self._read, daemon=True)
+        self.errors: list[str] = []
+        self.reader = threading.Thread(target=self._read, args=(self.proc.stdout, self.lines), daemon=True)
         self.reader.start()
+        threading.Thread(target=self._read, args=(self.proc.stderr, self.errors), daemon=True).start()
 
-    def _read(self) -> None:
-        assert self.proc.stdout is not None
-        for line in self.proc.stdout:
-            self.lines.append(line.rstrip("\n"))
+    @staticmethod
+    def _read(stream: Any, into: list[str]) -> None:
+        for line in stream:
+            into.append(line.rstrip("\n"))
 
     def wait_for(self, text: str, timeout: float = 30) -> None:
         if not wait_until(lambda: text in self.lines or self.proc.poll() is not None, timeout):
@@ -125,7 +138,8 @@ class Run:
 
     def reports(self) -> list[tuple[int, float]]:
         """A publisher's (count, monotonic time) reports."""
-        return [(e["count"], e["t"]) for e in (json.loads(line) for line in self.lines if line.startswith("{"))]
+        reports = [json.loads(line) for line in self.lines if line.startswith("{")]
+        return [(r["count"], r["t"]) for r in reports]
 
     def stop(self) -> float:
         """Its CPU seconds so far, then interrupt it (killed after 10 s) and wait for its output."""
@@ -148,8 +162,16 @@ def true_rate(reports: list[tuple[int, float]], start: float, end: float) -> flo
     return (c1 - c0) / (t1 - t0) if t1 > t0 else float("nan")
 
 
+def silent(run: Run) -> None:
+    """Say why a tool printed no result (its last lines)."""
+    last = "\n  ".join((run.lines + run.errors)[-8:])
+    print(f"{' '.join(run.proc.args[-4:])}: no result; its last lines:\n  {last}", file=sys.stderr)
+
+
 def hz_result(run: Run, cpu: float, rate: float) -> dict[str, Any]:
     rates = re.findall(r"average rate: ([\d.]+)", "\n".join(run.lines))
+    if not rates:
+        silent(run)
     seen = float(rates[-1]) if rates else float("nan")
     return {"rate": seen, "error_pct": 100 * abs(seen - rate) / rate, "cpu_s": cpu, "reports": len(rates)}
 
@@ -161,57 +183,57 @@ def echo_result(run: Run, cpu: float, rate: float) -> dict[str, Any]:
     numbers = [int(n) for n in re.findall(r"frame (\d+)", text)]
     span = numbers[-1] - numbers[0] + 1 if numbers else 0
     got = len(set(numbers))
-    return {"messages": sum(line.strip() == "---" for line in run.lines), "numbered": got,
-            "missing": span - got, "msgs_per_s": got / (span / rate) if span > 1 else 0.0, "cpu_s": cpu}  # fmt: skip
+    if not numbers:
+        silent(run)
+    printed = sum(line.strip() == "---" for line in run.lines)
+    per_s = got / (span / rate) if span > 1 else 0.0
+    return {"messages": printed, "numbered": got, "missing": span - got, "msgs_per_s": per_s, "cpu_s": cpu}
 
 
-def side_by_side(machine: Machine, tools: dict[str, tuple[list[str], dict[str, str]]], publisher: Run | Any,
-                 seconds: float) -> tuple[dict[str, tuple[Run, float]], float]:  # fmt: skip
-    """Both tools started together, each stopped after `seconds`; their runs and CPU, and the publisher's
-    true rate over the window."""
-    began = time.monotonic()
-    runs = {name: Run(machine, argv, env) for name, (argv, env) in tools.items()}
-    time.sleep(seconds)
-    ended = time.monotonic()
-    cpus = {name: run.stop() for name, run in runs.items()}
-    reports = publisher.reports() if isinstance(publisher, Run) else [
-        (e["count"], e["t"]) for e in publisher.of("published")]  # fmt: skip
-    return {name: (run, cpus[name]) for name, run in runs.items()}, true_rate(reports, began, ended)
+def scenario(
+    net: PrivateNetwork,
+    kind: str,
+    publisher: list[str],
+    robot_env: dict[str, str],
+    tools: dict[str, list[str]],
+    envs: dict[str, dict[str, str]],
+    seconds: float,
+) -> dict[str, Any]:
+    """The publisher on the robot (`publisher` + kind and rate), then both tools on the laptop started
+    together, each stopped after `seconds`; the publisher's true rate over that window and each result."""
+    hz = 1000 if kind == "hz" else 30
+    pub = Run(net.robot, [*publisher, "string" if kind == "hz" else "image", str(hz)], robot_env)
+    try:
+        pub.wait_for("ready")
+        began = time.monotonic()
+        runs = {name: Run(net.laptop, argv, envs[name]) for name, argv in tools.items()}
+        time.sleep(seconds)
+        ended = time.monotonic()
+        cpus = {name: run.stop() for name, run in runs.items()}
+    finally:
+        pub.stop()
+    rate = true_rate(pub.reports(), began, ended)
+    result = hz_result if kind == "hz" else echo_result
+    return {"true_rate": rate, **{name: result(run, cpus[name], rate) for name, run in runs.items()}}
 
 
 def bench_ros2(net: PrivateNetwork, what: list[str], seconds: float, tmp: Path) -> dict[str, Any]:
-    from tests.ros2_peers import RclpyPeer
-
     base = {k: v for k, v in os.environ.items() if not k.startswith("ROS") and k != "CYCLONEDDS_URI"}
     base.update(PYTHONUNBUFFERED="1", ROSTOOL_NO_DAEMON="1", ROS_DOMAIN_ID=str(fresh_domain()))
     peer = machine_peer_env(base, tmp)
-    ros2_env = dict(peer, AMENT_PREFIX_PATH=str(JAZZY), PATH=f"{JAZZY}/bin:{peer['PATH']}")
-    ours = [VENV_PYTHON, "-m", "rostool", "--ros2", "topic"]
-    net.laptop.run([str(ROS2), "daemon", "start"], ros2_env)
-    results: dict[str, Any] = {}
+    real = dict(peer, AMENT_PREFIX_PATH=str(JAZZY), PATH=f"{JAZZY}/bin:{peer['PATH']}")
+    envs = {"rostool": base, "real": real}
+    net.laptop.run([str(ROS2), "daemon", "start"], envs["real"])
+    publisher = [str(JAZZY / "bin" / "python"), "-c", ROS2_PUBLISHER]
+    results = {}
     try:
-        if "hz" in what:
-            talker = RclpyPeer("jazzy", base, tmp, ["--name", "fast", "--talk", "/fast", "--rate", "1000"],
-                               on=net.robot)  # fmt: skip
-            try:
-                talker.wait_for("ready", timeout=30)
-                runs, rate = side_by_side(net.laptop, {"rostool": ([*ours, "hz", "/fast"], base),
-                                          "real": ([str(ROS2), "topic", "hz", "/fast"], ros2_env)}, talker, seconds)  # fmt: skip
-            finally:
-                talker.stop()
-            results["hz"] = {"true_rate": rate, **{k: hz_result(r, c, rate) for k, (r, c) in runs.items()}}
-        if "echo" in what:
-            camera = Run(net.robot, [str(JAZZY / "bin" / "python"), "-c", ROS2_CAMERA, "30"], peer)
-            try:
-                camera.wait_for("ready")
-                runs, rate = side_by_side(net.laptop, {"rostool": ([*ours, "echo", "/image", "--no-arr"], base),
-                                          "real": ([str(ROS2), "topic", "echo", "/image", "--no-arr"], ros2_env)},
-                                          camera, seconds)  # fmt: skip
-            finally:
-                camera.stop()
-            results["echo"] = {"true_rate": rate, **{k: echo_result(r, c, rate) for k, (r, c) in runs.items()}}
+        for kind in what:
+            args = [kind, "/fast"] if kind == "hz" else [kind, "/image", "--no-arr"]
+            tools = {"rostool": [VENV_PYTHON, "-m", "rostool", "--ros2", "topic", *args],
+                     "real": [str(ROS2), "topic", *args]}  # fmt: skip
+            results[kind] = scenario(net, kind, publisher, peer, tools, envs, seconds)
     finally:
-        net.laptop.run([str(ROS2), "daemon", "stop"], ros2_env)
+        net.laptop.run([str(ROS2), "daemon", "stop"], envs["real"])
     return results
 
 
@@ -221,27 +243,19 @@ def bench_ros1(net: PrivateNetwork, what: list[str], seconds: float, tmp: Path) 
                 ROS_HOME=str(tmp), ROS_LOG_DIR=str(tmp))  # fmt: skip
     robot = debian_env({**base, "ROS_IP": net.robot.address})
     laptop = {**base, "ROS_IP": net.laptop.address}
+    envs = {"rostool": laptop, "real": debian_env(laptop)}
     master = net.robot.popen(["rosmaster", "--core", "-p", "11311"], robot, stdout=subprocess.DEVNULL,
                              stderr=subprocess.DEVNULL)  # fmt: skip
-    ours = [VENV_PYTHON, "-m", "rostool", "--ros1", "topic"]
-    results: dict[str, Any] = {}
+    results = {}
     try:
         if not wait_until(lambda: net.robot.run(["rosnode", "list"], robot, timeout=10).returncode == 0, 20):
             raise SystemExit("rosmaster did not start on the robot")
         for kind in what:
-            topic, hz = ("/fast", 1000) if kind == "hz" else ("/image", 30)
-            pub = Run(net.robot, [DEBIAN_PYTHON, "-c", ROS1_PUBLISHER, "image" if kind == "echo" else "string",
-                                  str(hz)], robot)  # fmt: skip
-            flags = [] if kind == "hz" else ["--noarr"]
-            try:
-                pub.wait_for("ready")
-                runs, rate = side_by_side(net.laptop, {"rostool": ([*ours, kind, topic, *flags], laptop),
-                                          "real": (["rostopic", kind, topic, *flags], debian_env(laptop))},
-                                          pub, seconds)  # fmt: skip
-            finally:
-                pub.stop()
-            result = hz_result if kind == "hz" else echo_result
-            results[kind] = {"true_rate": rate, **{k: result(r, c, rate) for k, (r, c) in runs.items()}}
+            args = [kind, "/fast"] if kind == "hz" else [kind, "/image", "--noarr"]
+            tools = {"rostool": [VENV_PYTHON, "-m", "rostool", "--ros1", "topic", *args],
+                     "real": ["rostopic", *args]}  # fmt: skip
+            publisher = [DEBIAN_PYTHON, "-c", ROS1_PUBLISHER]
+            results[kind] = scenario(net, kind, publisher, robot, tools, envs, seconds)
     finally:
         master.send_signal(signal.SIGINT)
         try:
@@ -262,8 +276,9 @@ def table(summary: dict[str, Any]) -> str:
             ours, real = got["rostool"], got["real"]
             name = f"{ros.upper()[:3]} {ros[-1]} `topic {kind}` ({real_name})"
             if kind == "hz":
-                rows.append(f"| {name}: rate error vs {got['true_rate']:.1f} Hz sent | {ours['error_pct']:.2f} % "
-                            f"({ours['rate']:.1f} Hz) | {real['error_pct']:.2f} % ({real['rate']:.1f} Hz) | "
+                rows.append(f"| {name}: rate error vs {got['true_rate']:.1f} Hz sent | "
+                            f"{ours['error_pct']:.2f} % ({ours['rate']:.1f} Hz) | "
+                            f"{real['error_pct']:.2f} % ({real['rate']:.1f} Hz) | "
                             f"{ratio(ours['error_pct'], real['error_pct'])} |")  # fmt: skip
             else:
                 rows.append(f"| {name}: msgs/s of {got['true_rate']:.1f} sent (printed, missing) | "
@@ -277,18 +292,20 @@ def table(summary: dict[str, Any]) -> str:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("what", nargs="*", choices=("hz", "echo"), default=["hz", "echo"])
+    parser.add_argument("what", nargs="*", metavar="hz|echo", help="scenarios (default: both)")
     parser.add_argument("--ros", choices=("1", "2", "both"), default="both")
     parser.add_argument("--seconds", type=float, default=8.0)
     parser.add_argument("--json", action="store_true", help="print a JSON summary instead of the table")
     args = parser.parse_args()
+    if set(args.what) - {"hz", "echo"}:
+        parser.error(f"unknown scenario: {sorted(set(args.what) - {'hz', 'echo'})} (hz, echo)")
     what = [w for w in ("hz", "echo") if w in (args.what or ["hz", "echo"])]
     if os.geteuid() != 0:
         sys.exit("bench_across_machines.py needs root: it makes network namespaces (ip netns)")
     reason = netns_missing()
     if reason:
         sys.exit(f"bench_across_machines.py: no private machines here: {reason}")
-    if args.ros != "1" and not (ROS2.exists() and PEER_SCRIPT.exists()):
+    if args.ros != "1" and not ROS2.exists():
         sys.exit(f"the real ros2 (ros2cli Jazzy) is missing at {ROS2}: run ./test.sh")
     if args.ros != "2" and not (shutil.which("rosmaster") and shutil.which("rostopic")):
         sys.exit("Debian's ROS 1 (rosmaster, rostopic) is missing: run ./test.sh as root")

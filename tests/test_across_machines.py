@@ -261,10 +261,18 @@ def test_doctor_names_the_domain_in_use(
     assert failed.returncode == 1, failed.stdout + failed.stderr
     lines = [line for line in failed.stdout.splitlines() if line.startswith("FAILED")]
     assert len(lines) == 1 and f"set ROS_DOMAIN_ID={domain}" in lines[0], failed.stdout
+    network.link(network.laptop, False)  # no carrier: nothing can carry SUBNET discovery
+    try:
+        cut = network.laptop.run([*doctor, "--listen", "0.5"], robots)
+    finally:
+        network.link(network.laptop, True)
+    assert cut.returncode == 1 and "FAILED multicast: no interface carries multicast (eth0 198.18.1.10: no " \
+        "carrier (cable, Wi-Fi?))" in cut.stdout, cut.stdout
     assert "hosts 198.18.1.20" in lines[0] and "198.18.2.20" not in lines[0]  # far: behind a router
     report = json.loads(network.laptop.run([*doctor, "--json"], robots).stdout)
     heard = f"participants on domain {domain} (heard from 198.18.1.20)"
-    assert report["checks"] == [{"name": "domain", "ok": True, "detail": heard}]
+    assert report["checks"] == [{"name": "multicast", "ok": True, "detail": "eth0 198.18.1.10: works"},
+                                {"name": "domain", "ok": True, "detail": heard}]  # fmt: skip
     assert report["network"]["range"] == "SUBNET" and "eth0 198.18.1.10" in report["network"]["interfaces"]
     local = RclpyPeer("jazzy", robots, tmp_path, ["--name", "laptop_node"], on=network.laptop)
     try:

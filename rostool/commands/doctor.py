@@ -27,7 +27,8 @@ Examples:
 )  # fmt: skip
 @click.option("--report", "full", is_flag=True, help="Every check and network fact, not only what failed.")
 @click.option("--listen", type=click.FloatRange(0, 30), default=None,
-              help="ROS 2: seconds to listen for other machines' participants (3.2).")  # fmt: skip
+              help="ROS 2: seconds to listen for other machines' participants (3.2); 0: look at this "
+              "machine only (no multicast test, nothing sent).")  # fmt: skip
 @json_option
 @click.pass_context
 def doctor(ctx: click.Context, full: bool, listen: float | None, as_json: bool) -> None:
@@ -35,8 +36,9 @@ def doctor(ctx: click.Context, full: bool, listen: float | None, as_json: bool) 
     discovery range), then check the network. ROS 1: the master answers, the address this machine
     advertises reaches back, every node's slave API answers, their host names resolve. ROS 2: the static
     peers resolve; which domains this machine's participants use, and (SUBNET) which domains other machines
-    announce participants on, listened to passively; a domain with nothing on it names the one in use.
-    Each failed check is one line, and the exit status is 1. Opens no graph.
+    announce participants on, listened to passively, and whether multicast works on each interface; a
+    domain with nothing on it names the one in use. Each failed check is one line, and the exit status is
+    1. Opens no graph.
 
     `rostool doctor hello` (ros2 doctor hello) checks that machines hear each other on a topic and by
     UDP multicast.

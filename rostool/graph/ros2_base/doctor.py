@@ -144,6 +144,59 @@ def interfaces() -> list[tuple[str, str]]:
     return found
 
 
+IFF_UP, IFF_LOOPBACK, IFF_RUNNING, IFF_MULTICAST = 0x1, 0x8, 0x40, 0x1000
+LOOP_GROUP = "239.255.0.250"  # a group of the organisation-local scope no ROS vendor uses
+
+
+def _flags(name: str) -> int:
+    import fcntl
+
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
+        reply = fcntl.ioctl(probe.fileno(), 0x8913, struct.pack("256s", name.encode()[:15]))  # SIOCGIFFLAGS
+    return int(struct.unpack_from("H", reply, 16)[0])
+
+
+def multicast_on(name: str, address: str) -> str | None:
+    """Whether multicast works on one interface: it is up, has a carrier and the MULTICAST flag, and a
+    datagram sent with TTL 0 (it never leaves this machine) to a group joined there comes back. None when it
+    does, else why not."""
+    try:
+        flags = _flags(name)
+    except OSError as err:
+        return err.strerror or str(err)
+    for flag, missing in ((IFF_UP, "down"), (IFF_RUNNING, "no carrier (cable, Wi-Fi?)"),
+                          (IFF_MULTICAST, "no MULTICAST flag")):  # fmt: skip
+        if not flags & flag:
+            return missing
+    try:
+        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM, socket.IPPROTO_UDP) as sock:
+            sock.bind(("", 0))
+            port = sock.getsockname()[1]
+            local = socket.inet_aton(address)
+            sock.setsockopt(socket.IPPROTO_IP, socket.IP_ADD_MEMBERSHIP, socket.inet_aton(LOOP_GROUP) + local)
+            sock.setsockopt(socket.IPPROTO_IP, socket.IP_MULTICAST_IF, local)
+            sock.setsockopt(socket.IPPROTO_IP, socket.IP_MULTICAST_TTL, 0)
+            sock.setsockopt(socket.IPPROTO_IP, socket.IP_MULTICAST_LOOP, 1)
+            sock.settimeout(0.3)
+            token = os.urandom(8)
+            sock.sendto(token, (LOOP_GROUP, port))
+            while True:
+                if sock.recv(64) == token:
+                    return None
+    except OSError as err:
+        return f"a datagram to {LOOP_GROUP} did not come back ({err.strerror or err})"
+
+
+def _multicast_check(used: list[tuple[str, str]]) -> Check:
+    verdicts = {f"{name} {address}": multicast_on(name, address)
+                for name, address in used if not address.startswith("127.")}  # fmt: skip
+    shown = "; ".join(f"{where}: {'works' if why is None else why}" for where, why in verdicts.items())
+    if any(why is None for why in verdicts.values()):
+        return Check("multicast", True, shown)
+    return Check("multicast", False, f"no interface carries multicast ({shown or 'only loopback'}): SUBNET "
+                 "discovery needs one; name the other machines in ROS_STATIC_PEERS")  # fmt: skip
+
+
 def checks(env: Mapping[str, str], seconds: float = LISTEN_SECONDS) -> tuple[dict[str, object], list[Check]]:
     """The facts of discovery and the checks, as `doctor` shows them."""
     domain, scope, peers = domain_id(env), discovery_range(env), static_peers(env)
@@ -160,7 +213,10 @@ def checks(env: Mapping[str, str], seconds: float = LISTEN_SECONDS) -> tuple[dic
         found.append(Check("static peers", not unresolved, f"{', '.join(unresolved)} do not resolve here"
                            if unresolved else f"{len(peers)} resolve: {', '.join(peers)}"))  # fmt: skip
     local = local_domains()
+    # seconds == 0: read this machine only (join no group, send nothing)
     multicast = scope in ("SUBNET", "SYSTEM_DEFAULT") and seconds > 0
+    if multicast:
+        found.append(_multicast_check(used))
     heard = listen(seconds) if multicast else {}
     facts["this_machine"] = {str(d): n for d, n in local.items()}
     facts["heard"] = {str(d): {"participants": len(h.participants), "hosts": sorted(h.hosts),
