@@ -168,7 +168,7 @@ def silent(run: Run) -> None:
     print(f"{' '.join(run.proc.args[-4:])}: no result; its last lines:\n  {last}", file=sys.stderr)
 
 
-def hz_result(run: Run, cpu: float, rate: float) -> dict[str, Any]:
+def hz_result(run: Run, cpu: float, rate: float, _first: float) -> dict[str, Any]:
     rates = re.findall(r"average rate: ([\d.]+)", "\n".join(run.lines))
     if not rates:
         silent(run)
@@ -176,9 +176,10 @@ def hz_result(run: Run, cpu: float, rate: float) -> dict[str, Any]:
     return {"rate": seen, "error_pct": 100 * abs(seen - rate) / rate, "cpu_s": cpu, "reports": len(rates)}
 
 
-def echo_result(run: Run, cpu: float, rate: float) -> dict[str, Any]:
+def echo_result(run: Run, cpu: float, rate: float, first: float) -> dict[str, Any]:
     """Messages printed; by their numbers, how many of the publisher's between the first and the last
-    printed were missing; msgs/s = printed / (that span at the publisher's rate)."""
+    printed were missing; msgs/s = printed / (that span at the publisher's rate); seconds from the start
+    to the publication of the first printed (`first`: the publisher's count at the start)."""
     text = "\n".join(run.lines)
     numbers = [int(n) for n in re.findall(r"frame (\d+)", text)]
     span = numbers[-1] - numbers[0] + 1 if numbers else 0
@@ -187,7 +188,9 @@ def echo_result(run: Run, cpu: float, rate: float) -> dict[str, Any]:
         silent(run)
     printed = sum(line.strip() == "---" for line in run.lines)
     per_s = got / (span / rate) if span > 1 else 0.0
-    return {"messages": printed, "numbered": got, "missing": span - got, "msgs_per_s": per_s, "cpu_s": cpu}
+    first_s = (numbers[0] - first) / rate if numbers else float("nan")
+    return {"messages": printed, "numbered": got, "missing": span - got, "msgs_per_s": per_s,
+            "first_s": first_s, "cpu_s": cpu}  # fmt: skip
 
 
 def scenario(
@@ -205,6 +208,7 @@ def scenario(
     pub = Run(net.robot, [*publisher, "string" if kind == "hz" else "image", str(hz)], robot_env)
     try:
         pub.wait_for("ready")
+        wait_until(lambda: bool(pub.reports()), 10)  # its first count, to date the tools' first message
         began = time.monotonic()
         runs = {name: Run(net.laptop, argv, envs[name]) for name, argv in tools.items()}
         time.sleep(seconds)
@@ -213,8 +217,10 @@ def scenario(
     finally:
         pub.stop()
     rate = true_rate(pub.reports(), began, ended)
+    count, t = [r for r in pub.reports() if r[1] <= began][-1]
+    first = count + (began - t) * rate  # the publisher's count when the tools started
     result = hz_result if kind == "hz" else echo_result
-    return {"true_rate": rate, **{name: result(run, cpus[name], rate) for name, run in runs.items()}}
+    return {"true_rate": rate, **{name: result(run, cpus[name], rate, first) for name, run in runs.items()}}
 
 
 def bench_ros2(net: PrivateNetwork, what: list[str], seconds: float, tmp: Path) -> dict[str, Any]:
@@ -271,22 +277,26 @@ def ratio(ours: float, real: float) -> str:
 
 def table(summary: dict[str, Any]) -> str:
     rows = ["| scenario | rostool | real tool | ratio |", "|---|---|---|---|"]
+
+    def row(label: str, key: str, text: str) -> None:
+        ours, real = got["rostool"], got["real"]
+        rows.append(f"| {name}: {label} | {text.format(**ours)} | {text.format(**real)} | "
+                    f"{ratio(ours[key], real[key])} |")  # fmt: skip
+
     for ros, real_name in (("ros2", "ros2"), ("ros1", "rostopic")):
         for kind, got in summary.get(ros, {}).items():
-            ours, real = got["rostool"], got["real"]
-            name = f"{ros.upper()[:3]} {ros[-1]} `topic {kind}` ({real_name})"
+            name = f"ROS {ros[-1]} `topic {kind}` ({real_name})"
+            sent = f"{got['true_rate']:.1f} Hz sent"
             if kind == "hz":
-                rows.append(f"| {name}: rate error vs {got['true_rate']:.1f} Hz sent | "
-                            f"{ours['error_pct']:.2f} % ({ours['rate']:.1f} Hz) | "
-                            f"{real['error_pct']:.2f} % ({real['rate']:.1f} Hz) | "
-                            f"{ratio(ours['error_pct'], real['error_pct'])} |")  # fmt: skip
+                row(f"rate error vs {sent}", "error_pct", "{error_pct:.2f} % ({rate:.1f} Hz)")
             else:
-                rows.append(f"| {name}: msgs/s of {got['true_rate']:.1f} sent (printed, missing) | "
-                            f"{ours['msgs_per_s']:.1f} ({ours['messages']}, {ours['missing']}) | "
-                            f"{real['msgs_per_s']:.1f} ({real['messages']}, {real['missing']}) | "
-                            f"{ratio(ours['msgs_per_s'], real['msgs_per_s'])} |")  # fmt: skip
-            rows.append(f"| {name}: CPU s | {ours['cpu_s']:.2f} | {real['cpu_s']:.2f} | "
-                        f"{ratio(ours['cpu_s'], real['cpu_s'])} |")  # fmt: skip
+                row(
+                    f"msgs/s of {sent} (printed, missing)",
+                    "msgs_per_s",
+                    "{msgs_per_s:.1f} ({messages}, {missing})",
+                )
+                row("first message published after start, s", "first_s", "{first_s:.2f}")
+            row("CPU s", "cpu_s", "{cpu_s:.2f}")
     return "\n".join(rows)
 
 

@@ -264,8 +264,11 @@ def test_doctor_names_the_domain_in_use(
     network.link(network.laptop, False)  # no carrier: nothing can carry SUBNET discovery
     try:
         cut = network.laptop.run([*doctor, "--listen", "0.5"], robots)
+        blind = network.laptop.run([sys.executable, "-m", "rostool", "--ros2", "node", "list"], wrong)
     finally:
         network.link(network.laptop, True)
+    assert blind.returncode == 1 and len(blind.stderr.strip().splitlines()) == 1, blind.stderr
+    assert "no interface can carry multicast (eth0: no carrier (cable, Wi-Fi?))" in blind.stderr
     assert cut.returncode == 1 and "FAILED multicast: no interface carries multicast (eth0 198.18.1.10: no " \
         "carrier (cable, Wi-Fi?))" in cut.stdout, cut.stdout
     assert "hosts 198.18.1.20" in lines[0] and "198.18.2.20" not in lines[0]  # far: behind a router

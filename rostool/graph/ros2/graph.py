@@ -93,9 +93,9 @@ class Ros2Graph(Ros2Base):
             found = cache.settle(maximum=NODES_MAX_SECONDS if nodes else SETTLE_MAX_SECONDS, nodes=nodes)
         if require_peers and self.require_peers and not found:
             participant = self.session.participant
-            from rostool.graph.ros2_base.doctor import other_domain_hint
+            from rostool.graph.ros2_base.doctor import empty_listing_hint
 
-            hint = other_domain_hint(participant.domain_id) or (
+            hint = empty_listing_hint(participant.domain_id, participant.range) or (
                 ": is anything running with this ROS_DOMAIN_ID? `rostool doctor` checks the network"
             )
             raise RostoolError(

@@ -81,14 +81,33 @@ def _own_socket_inodes() -> set[str]:
     return inodes
 
 
-def other_domain_hint(domain: int) -> str:
-    """For an empty listing: where this machine's participants are instead (or "")."""
+def empty_listing_hint(domain: int, scope: str) -> str:
+    """Why a listing found nobody, where this machine can see it without sending anything: its participants
+    are on another domain, or (SUBNET) no interface can carry multicast. "" when nothing is visible."""
     elsewhere = {d: n for d, n in local_domains().items() if d != domain}
-    if not elsewhere:
-        return ""
-    shown = ", ".join(f"{n} on domain {d}" for d, n in elsewhere.items())
-    best = max(elsewhere, key=lambda d: elsewhere[d])
-    return f"; this machine's participants are elsewhere ({shown}): set ROS_DOMAIN_ID={best}?"
+    if elsewhere:
+        shown = ", ".join(f"{n} on domain {d}" for d, n in elsewhere.items())
+        best = max(elsewhere, key=lambda d: elsewhere[d])
+        return f"; this machine's participants are elsewhere ({shown}): set ROS_DOMAIN_ID={best}?"
+    if scope in ("SUBNET", "SYSTEM_DEFAULT"):
+        states = {name: _carrier(name) for name, address in interfaces() if not address.startswith("127.")}
+        if not any(state is None for state in states.values()):
+            shown = ", ".join(f"{name}: {state}" for name, state in states.items()) or "only loopback"
+            return f"; no interface can carry multicast ({shown}): is the network up?"
+    return ""
+
+
+def _carrier(name: str) -> str | None:
+    """None when the interface is up with a carrier and can multicast, else what it lacks."""
+    try:
+        flags = _flags(name)
+    except OSError as err:
+        return err.strerror or str(err)
+    for flag, missing in ((IFF_UP, "down"), (IFF_RUNNING, "no carrier (cable, Wi-Fi?)"),
+                          (IFF_MULTICAST, "no MULTICAST flag")):  # fmt: skip
+        if not flags & flag:
+            return missing
+    return None
 
 
 def listen(seconds: float = LISTEN_SECONDS) -> dict[int, Heard]:
@@ -160,14 +179,9 @@ def multicast_on(name: str, address: str) -> str | None:
     """Whether multicast works on one interface: it is up, has a carrier and the MULTICAST flag, and a
     datagram sent with TTL 0 (it never leaves this machine) to a group joined there comes back. None when it
     does, else why not."""
-    try:
-        flags = _flags(name)
-    except OSError as err:
-        return err.strerror or str(err)
-    for flag, missing in ((IFF_UP, "down"), (IFF_RUNNING, "no carrier (cable, Wi-Fi?)"),
-                          (IFF_MULTICAST, "no MULTICAST flag")):  # fmt: skip
-        if not flags & flag:
-            return missing
+    lacking = _carrier(name)
+    if lacking is not None:
+        return lacking
     try:
         with socket.socket(socket.AF_INET, socket.SOCK_DGRAM, socket.IPPROTO_UDP) as sock:
             sock.bind(("", 0))
