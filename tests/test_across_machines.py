@@ -488,3 +488,21 @@ def test_ros2_verbs_across_the_link(
     assert play.returncode == 0, play.stderr
     heard = robot_services.wait_for("heard", lambda e: e["topic"] == "/topic")
     assert heard["data"] in {text for _t, text in bag_texts(TALKER_BAG / "talker.mcap", "/topic")}
+
+
+def test_doctor_names_mixed_distros(network: PrivateNetwork, robots: dict[str, str], tmp_path: Path) -> None:
+    """A Kilted node beside the Jazzy one: their announcements tell Fast DDS 3 from Fast DDS 2, and doctor
+    fails on the mix, naming each release and its host."""
+    peer_python("kilted")
+    kilted = RclpyPeer("kilted", robots, tmp_path, ["--name", "kilted_robot"], on=network.robot)
+    try:
+        kilted.wait_for("ready")
+        done = network.laptop.run([sys.executable, "-m", "rostool", "--ros2", "doctor", "--json"], robots)
+    finally:
+        kilted.stop()
+    report = json.loads(done.stdout)
+    releases = report["network"]["heard"][robots["ROS_DOMAIN_ID"]]["releases"]
+    assert releases == {"Fast DDS 2 (Jazzy or earlier)": ["198.18.1.20"],
+                        "Fast DDS 3 (Kilted or later)": ["198.18.1.20"]}, report  # fmt: skip
+    failed = [check for check in report["checks"] if not check["ok"]]
+    assert [check["name"] for check in failed] == ["distros"] and done.returncode == 1, report

@@ -124,3 +124,20 @@ def test_our_serialized_messages_equal_real_ros2_bytes() -> None:
     for index, raw in enumerate(recorded):
         message = types.store.types["std_msgs/msg/String"](data=f"Hello, world! {index}")
         assert types.serialize(message, "std_msgs/msg/String") == raw
+
+
+def test_announcements_of_any_shape_read_safely() -> None:
+    """doctor reads other machines' SPDP datagrams: any bytes give a release or None, never an exception."""
+    import random
+
+    from rostool.graph.ros2_base.doctor import product_version, release
+
+    header = b"RTPS\x02\x02\x01\x0f" + bytes(12)
+    chance = random.Random(36)
+    for _ in range(3000):
+        body = bytes(chance.randrange(256) for _ in range(chance.randrange(80)))
+        message = header + bytes([0x15, chance.randrange(4)]) + body
+        assert product_version(message) is None or len(product_version(message) or ()) == 3
+        assert release(message).startswith("Fast DDS")
+    truncated = header + b"\x15\x01\xff\xff"  # a length past the end
+    assert product_version(truncated) is None

@@ -41,6 +41,52 @@ class Heard:
     participants: set[bytes] = field(default_factory=set)  # GUID prefixes
     hosts: set[str] = field(default_factory=set)
     vendors: set[str] = field(default_factory=set)
+    releases: dict[str, set[str]] = field(default_factory=dict)  # middleware release -> hosts
+
+
+PID_SENTINEL, PID_PRODUCT_VERSION = 0x0001, 0x8000  # the latter eProsima's: major, minor, patch, tweak
+DATA_SUBMESSAGE = 0x15
+# what a Fast DDS participant's announcement tells of its release (and so of its ROS 2 distro)
+FAST_DDS = ("Fast DDS 2 (Jazzy or earlier)", "Fast DDS 3 (Kilted or later)")
+
+
+def product_version(message: bytes) -> tuple[int, ...] | None:
+    """The PID_PRODUCT_VERSION an SPDP message (DATA(p)) carries, or None: Fast DDS 3 (Kilted) announces
+    it, Fast DDS 2 (Jazzy and earlier) does not. Bounded by the message: a malformed one gives None."""
+    at = 20  # after the RTPS header
+    while at + 4 <= len(message):
+        kind, flags = message[at], message[at + 1]
+        order = "<" if flags & 1 else ">"
+        (length,) = struct.unpack_from(f"{order}H", message, at + 2)
+        body = message[at + 4 : at + 4 + length]
+        if kind == DATA_SUBMESSAGE and len(body) >= 24:
+            (to_qos,) = struct.unpack_from(f"{order}H", body, 2)
+            payload = body[4 + to_qos :]
+            if flags & 0x2 or len(payload) < 4:  # inline QoS ahead of the data: not what SPDP sends
+                return None
+            pl_order = "<" if payload[:2] == b"\x00\x03" else ">"
+            pos = 4
+            while pos + 4 <= len(payload):
+                pid, size = struct.unpack_from(f"{pl_order}HH", payload, pos)
+                if pid == PID_SENTINEL:
+                    return None
+                if pid == PID_PRODUCT_VERSION and size >= 4:
+                    return tuple(payload[pos + 4 : pos + 7])
+                pos += 4 + size
+            return None
+        if length == 0:
+            return None
+        at += 4 + length
+    return None
+
+
+def release(message: bytes) -> str:
+    """The middleware release an SPDP message shows, with the ROS 2 distros that ship it."""
+    vendor = VENDORS.get(message[6:8], f"vendor {message[6:8].hex()}")
+    if message[6:8] != b"\x01\x0f":
+        return vendor
+    version = product_version(message)
+    return FAST_DDS[0] if version is None or version[0] < 3 else FAST_DDS[1]
 
 
 def local_domains(proc: Path = Path("/proc/net")) -> dict[int, int]:
@@ -141,6 +187,7 @@ def listen(seconds: float = LISTEN_SECONDS) -> dict[int, Heard]:
                         entry.participants.add(data[8:20])
                         entry.hosts.add(host)
                         entry.vendors.add(VENDORS.get(data[6:8], f"vendor {data[6:8].hex()}"))
+                        entry.releases.setdefault(release(data), set()).add(host)
     finally:
         for sock in sockets:
             sock.close()
@@ -233,8 +280,7 @@ def checks(env: Mapping[str, str], seconds: float = LISTEN_SECONDS) -> tuple[dic
         found.append(_multicast_check(used))
     heard = listen(seconds) if multicast else {}
     facts["this_machine"] = {str(d): n for d, n in local.items()}
-    facts["heard"] = {str(d): {"participants": len(h.participants), "hosts": sorted(h.hosts),
-                               "vendors": sorted(h.vendors)} for d, h in sorted(heard.items())}  # fmt: skip
+    facts["heard"] = {str(d): _heard_facts(h) for d, h in sorted(heard.items())}
     listened = seconds if multicast else None
     found.append(_domain_check(domain, local, heard, listened))
     vendors = {v for h in heard.values() for v in h.vendors}
@@ -242,7 +288,18 @@ def checks(env: Mapping[str, str], seconds: float = LISTEN_SECONDS) -> tuple[dic
         named = ", ".join(sorted(vendors))
         found.append(Check("middleware", True, f"several DDS vendors announce here: {named} (topics "
                            "interoperate; services between some do not)"))  # fmt: skip
+    fast = {name: hosts for h in heard.values() for name, hosts in h.releases.items() if name in FAST_DDS}
+    if len(fast) > 1:
+        shown = "; ".join(f"{name} on {', '.join(sorted(hosts))}" for name, hosts in sorted(fast.items()))
+        found.append(Check("distros", False, f"several ROS 2 distros announce here ({shown}): ROS 2 "
+                           "supports one distro per graph; messages and services may not match"))  # fmt: skip
     return facts, found
+
+
+def _heard_facts(heard: Heard) -> dict[str, object]:
+    releases = {name: sorted(hosts) for name, hosts in sorted(heard.releases.items())}
+    return {"participants": len(heard.participants), "hosts": sorted(heard.hosts),
+            "vendors": sorted(heard.vendors), "releases": releases}  # fmt: skip
 
 
 def _domain_check(
