@@ -397,6 +397,13 @@ def test_ros1_verbs_ride_out_a_link_drop(
     # TCP's retransmission timer backed off during the drop (0.2, 0.4, ... 3.2 s): the backlog comes when it
     # next fires, up to a few seconds after the link is back
     assert DROP_SECONDS - 1 <= seconds <= DROP_SECONDS + 6, silences
+    # and the recording plays back from the laptop into the robot's subscriber (bag play registers the
+    # laptop's route address, as pub does)
+    play = network.laptop.run([*rostool, "bag", "play", "--remap", "/robot_says:=/laptop_says", str(bag)],
+                              env)  # fmt: skip
+    assert play.returncode == 0, play.stderr
+    assert ros1_robot.wait_for(lambda out: "heard robot " in out, timeout=15)
+    assert set(numbers(ros1_robot.stdout, "heard robot")) <= set(got)
 
 
 @pytest.mark.parametrize("backend", ["dds", "rclpy"])
