@@ -214,6 +214,11 @@ def test_ros1_from_the_laptop_with_the_master_uri_alone(
     assert "ROS_IP=198.18.1.10" in chosen[0]
     echo = network.laptop.run([*rostool, "topic", "echo", "/robot_says", "-n", "2"], env)
     assert echo.returncode == 0 and echo.stdout.count('data: "robot ') == 2, echo.stderr
+    listed = network.laptop.run([*rostool, "topic", "list"], env).stdout.split()
+    assert {"/robot_says", "/laptop_says", "/rosout"} <= set(listed), listed
+    assert network.laptop.run([*rostool, "param", "set", "/from_laptop", "42"], env).returncode == 0
+    robot_env = debian_env({**laptop_env(), "ROS_MASTER_URI": env["ROS_MASTER_URI"], "ROS_IP": "198.18.1.20"})
+    assert network.robot.run(["rosparam", "get", "/from_laptop"], robot_env).stdout.strip() == "42"
     call = network.laptop.run([*rostool, "service", "call", "/robot_switch", "data: true"], env)
     assert call.stdout.split() == ["success:", "True", "message:", '"switched', 'True"'], call.stderr
     # ROS_IP always wins: the laptop's own name, pinned, is what the robot is told (and cannot reach)
@@ -513,3 +518,21 @@ def test_doctor_names_mixed_distros(network: PrivateNetwork, robots: dict[str, s
                         "Fast DDS 3 (Kilted or later)": ["198.18.1.20"]}, report  # fmt: skip
     failed = [check for check in report["checks"] if not check["ok"]]
     assert [check["name"] for check in failed] == ["distros"] and done.returncode == 1, report
+
+
+def test_rostool_core_on_a_robot_serves_the_laptop(network: PrivateNetwork, tmp_path: Path) -> None:
+    """`rostool core --host 0.0.0.0` on a robot whose name resolves to loopback advertises its address on
+    the default route, and the laptop uses it with ROS_MASTER_URI alone."""
+    rostool = [sys.executable, "-m", "rostool", "--ros1"]
+    serve = [*rostool, "core", "--host", "0.0.0.0", "--port", "11312"]
+    core = Watched(network.robot.popen(serve, laptop_env()))
+    env = laptop_env(ROS_MASTER_URI=f"http://{network.robot.address}:11312")
+    try:
+        set_it = [*rostool, "param", "set", "/seen", "laptop"]
+        assert wait_until(lambda: network.laptop.run(set_it, env).returncode == 0, timeout=15, interval=0.3)
+        got = network.laptop.run([*rostool, "param", "get", "/seen"], env)
+        assert got.stdout.strip() == "laptop", got.stderr
+    finally:
+        _out, err = core.stop()
+    assert "started rostool core at http://198.18.1.20:11312/" in err, err
+    assert "advertising 198.18.1.20 to other machines" in err and "'robot' resolves to 127.0.1.1" in err
