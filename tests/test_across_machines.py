@@ -536,3 +536,41 @@ def test_rostool_core_on_a_robot_serves_the_laptop(network: PrivateNetwork, tmp_
         _out, err = core.stop()
     assert "started rostool core at http://198.18.1.20:11312/" in err, err
     assert "advertising 198.18.1.20 to other machines" in err and "'robot' resolves to 127.0.1.1" in err
+
+
+TALKER_ROS1 = r"""
+import sys, rospy
+from std_msgs.msg import String
+rospy.init_node("robot_talker")
+talk = rospy.Publisher("/talker_says", String, queue_size=10)
+rate = rospy.Rate(5)
+while not rospy.is_shutdown():
+    talk.publish(sys.argv[1])
+    rate.sleep()
+"""
+
+
+def test_ros1_echo_follows_a_publisher_that_died_and_came_back(
+    network: PrivateNetwork, ros1_robot: Watched, tmp_path: Path
+) -> None:
+    """The robot's talker is killed (its connection dies, it never unregisters) and started again: the
+    master tells the laptop's echo through the address it advertised, and the echo takes the new one."""
+    script = tmp_path / "talker.py"
+    script.write_text(TALKER_ROS1)
+    robot_env = debian_env({**laptop_env(), "ROS_MASTER_URI": f"http://{network.robot.address}:11311",
+                            "ROS_IP": network.robot.address, "ROS_HOME": str(tmp_path)})  # fmt: skip
+    first = network.robot.popen([DEBIAN_PYTHON, str(script), "first life"], robot_env)
+    env = laptop_env(ROS_MASTER_URI=f"http://{network.robot.address}:11311")
+    echo_it = [sys.executable, "-m", "rostool", "topic", "echo", "/talker_says"]
+    echo = Watched(network.laptop.popen(echo_it, env))
+    second = None
+    try:
+        assert echo.wait_for(lambda out: "first life" in out, timeout=20), echo.stdout
+        first.kill()
+        first.wait()
+        second = network.robot.popen([DEBIAN_PYTHON, str(script), "second life"], robot_env)
+        assert echo.wait_for(lambda out: "second life" in out, timeout=20), echo.stdout
+    finally:
+        echo.stop()
+        if second is not None:
+            stop(second)
