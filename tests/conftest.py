@@ -38,7 +38,7 @@ if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
 os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
 
 # the real ROS 2 peers' fixtures (distro, graph_env, start_peer)
-pytest_plugins = ("tests.ros2_peers", "tests.ros2_backends")
+pytest_plugins = ("tests.ros2_peers", "tests.ros2_backends", "tests.netns")
 
 # Modules whose tests each take half a minute or more (dozens of rostool runs against one graph): started
 # first, so that no xdist worker begins one of them when the others are nearly done

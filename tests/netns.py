@@ -188,3 +188,17 @@ def private_network() -> Iterator[PrivateNetwork]:
         yield network
     finally:
         network.close()
+
+
+@pytest.fixture(scope="module")
+def network() -> Iterator[PrivateNetwork]:
+    """The private machines, shared by one test module (registered as a plugin in conftest)."""
+    with private_network() as made:
+        yield made
+
+
+def user_env(**settings: str) -> dict[str, str]:
+    """A user's shell on a private machine: no ROS variable but `settings`; rostool answers directly."""
+    env = {k: v for k, v in os.environ.items() if not k.startswith("ROS") and k != "CYCLONEDDS_URI"}
+    env.update(PYTHONUNBUFFERED="1", ROSTOOL_NO_DAEMON="1", **settings)
+    return env

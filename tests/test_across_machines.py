@@ -10,7 +10,6 @@ exactly the robot nodes it sees, in every setting (issue 36).
 from __future__ import annotations
 
 import json
-import os
 import re
 import subprocess
 import sys
@@ -21,7 +20,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.netns import PrivateNetwork, private_network
+from tests.netns import PrivateNetwork, user_env
 from tests.ros2_peers import RclpyPeer, machine_peer_env, peer_python, rclpy_command
 from tests.support import (
     DEBIAN_PYTHON,
@@ -36,17 +35,7 @@ from tests.support import (
 ROBOT_NODE, FAR_NODE = "/near_robot", "/far_robot"
 
 
-@pytest.fixture(scope="module")
-def network() -> Iterator[PrivateNetwork]:
-    with private_network() as made:
-        yield made
-
-
-def laptop_env(**settings: str) -> dict[str, str]:
-    """A user's shell on the laptop: no ROS variable but the ones given (and the test's domain)."""
-    env = {k: v for k, v in os.environ.items() if not k.startswith("ROS") and k != "CYCLONEDDS_URI"}
-    env.update(PYTHONUNBUFFERED="1", ROSTOOL_NO_DAEMON="1", **settings)
-    return env
+laptop_env = user_env  # a user's shell on the laptop
 
 
 # --- ROS 2: discovery as ROS 2 defines it -------------------------------------------------------------

@@ -8,19 +8,15 @@ laptop's hellos, and ROS 1 through rostool's master on the robot. Never in the h
 from __future__ import annotations
 
 import json
-import os
 import re
 import signal
 import subprocess
 import sys
 import time
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
-import pytest
-
-from tests.netns import PrivateNetwork, private_network
+from tests.netns import PrivateNetwork, user_env
 from tests.ros2_peers import RclpyPeer, machine_peer_env, peer_python, rclpy_command
 from tests.support import fresh_domain, wait_until
 
@@ -42,17 +38,9 @@ SUMMARY = re.compile(
 )
 
 
-@pytest.fixture(scope="module")
-def network() -> Iterator[PrivateNetwork]:
-    with private_network() as made:
-        yield made
-
-
 def machine_env(**settings: str) -> dict[str, str]:
     """A user's shell on a private machine: no ROS variable but the test's domain and `settings`."""
-    env = {k: v for k, v in os.environ.items() if not k.startswith("ROS") and k != "CYCLONEDDS_URI"}
-    env.update(PYTHONUNBUFFERED="1", ROSTOOL_NO_DAEMON="1", ROS_DOMAIN_ID=str(fresh_domain()), **settings)
-    return env
+    return user_env(ROS_DOMAIN_ID=str(fresh_domain()), **settings)
 
 
 def _rows(block: str) -> dict[str, int]:

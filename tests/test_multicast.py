@@ -11,11 +11,10 @@ import re
 import signal
 import subprocess
 import sys
-from collections.abc import Iterator
 
 import pytest
 
-from tests.netns import LAN, PrivateNetwork, private_network
+from tests.netns import LAN, PrivateNetwork
 from tests.support import DEBIAN_PYTHON
 
 MULTICAST = [sys.executable, "-m", "rostool", "multicast"]
@@ -60,12 +59,6 @@ s.bind(("", int(sys.argv[1])))
 print("ready", flush=True)
 time.sleep(30)
 """
-
-
-@pytest.fixture(scope="module")
-def network() -> Iterator[PrivateNetwork]:
-    with private_network() as made:
-        yield made
 
 
 @pytest.fixture(scope="module")

@@ -130,7 +130,7 @@ def test_announcements_of_any_shape_read_safely() -> None:
     """doctor reads other machines' SPDP datagrams: any bytes give a release or None, never an exception."""
     import random
 
-    from rostool.graph.ros2_base.doctor import product_version, release
+    from rostool.graph.ros2_base.spdp import product_version, release
 
     header = b"RTPS\x02\x02\x01\x0f" + bytes(12)
     chance = random.Random(36)
