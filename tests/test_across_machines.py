@@ -27,9 +27,11 @@ from tests.support import (
     Watched,
     debian_env,
     fresh_domain,
+    interface_workspace,
     require_ros1_peers,
     stop,
     wait_until,
+    with_genpy_classes,
 )
 
 ROBOT_NODE, FAR_NODE = "/near_robot", "/far_robot"
@@ -563,3 +565,31 @@ def test_ros1_echo_follows_a_publisher_that_died_and_came_back(
         echo.stop()
         if second is not None:
             stop(second)
+
+
+def test_ros1_action_across_the_link(network: PrivateNetwork, ros1_robot: Watched, tmp_path: Path) -> None:
+    """The book's actionlib server (MoveToPoint, genpy classes) on the robot, a goal from the laptop with
+    ROS_MASTER_URI alone: the robot's server must reach the laptop's goal publisher and the laptop the
+    server's feedback and result."""
+    from tests.test_actions_ros1 import ACTION, MOVE_ACTION, NAV_SERVER
+
+    action = {"robot_navigation_pkg/action/MoveToPoint.action": MOVE_ACTION}
+    src = interface_workspace(tmp_path / "ws", action)
+    master = laptop_env(ROS_MASTER_URI=f"http://{network.robot.address}:11311")
+    env = with_genpy_classes(master, src, tmp_path)
+    script = tmp_path / "server.py"
+    script.write_text(NAV_SERVER)
+    robot_env = debian_env({**env, "ROS_IP": network.robot.address, "ROS_HOME": str(tmp_path)})
+    server = Watched(network.robot.popen([DEBIAN_PYTHON, str(script)], robot_env))
+    rostool = [sys.executable, "-m", "rostool", "--ros1"]
+    try:
+        assert server.wait_for(lambda out: "READY" in out, timeout=20), server.stop()
+        listed = [*rostool, "action", "list"]
+        assert wait_until(lambda: ACTION in network.laptop.run(listed, env).stdout.split(), timeout=15)
+        goal = "{point: {x: 1.0, y: 1.0, z: 0.0}}"
+        done = network.laptop.run([*rostool, "action", "send-goal", ACTION, goal, "--feedback"], env, 40)
+        assert done.returncode == 0 and "Status: SUCCEEDED" in done.stdout, done.stdout + done.stderr
+        assert "distance_to_point" in done.stdout  # feedback came back across the link
+        assert server.wait_for(lambda out: "SUCCEEDED" in out, timeout=10)
+    finally:
+        server.stop()
