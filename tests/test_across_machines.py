@@ -21,7 +21,7 @@ from pathlib import Path
 import pytest
 
 from tests.netns import PrivateNetwork, user_env
-from tests.ros2_peers import RclpyPeer, machine_peer_env, peer_python, rclpy_command
+from tests.ros2_peers import DISTROS, RclpyPeer, machine_peer_env, peer_python, rclpy_command
 from tests.support import (
     DEBIAN_PYTHON,
     Watched,
@@ -93,13 +93,13 @@ def referee_view(network: PrivateNetwork, env: dict[str, str], tmp_path: Path, s
 
 
 def laptop_command(
-    backend: str, args: list[str], env: dict[str, str], tmp_path: Path
+    backend: str, args: list[str], env: dict[str, str], tmp_path: Path, distro: str = "jazzy"
 ) -> tuple[list[str], dict[str, str]]:
     """`rostool --ros2 ARGS` on one backend as a user on the laptop runs it: rostool's DDS in the test
-    venv, or rclpy (Jazzy, Fast DDS with ROS's defaults) in the peer venv; the command and its env."""
+    venv, or rclpy (the distro's, Fast DDS with ROS's defaults) in its peer venv; the command and its env."""
     if backend == "dds":
         return [sys.executable, "-m", "rostool", "--ros2", *args], env
-    return rclpy_command(["--ros2", *args], "jazzy"), machine_peer_env(env, tmp_path)
+    return rclpy_command(["--ros2", *args], distro), machine_peer_env(env, tmp_path)
 
 
 def laptop_listing(network: PrivateNetwork, env: dict[str, str], tmp_path: Path, backend: str) -> set[str]:
@@ -446,14 +446,20 @@ def test_ros2_verbs_ride_out_a_link_drop(
 TALKER_BAG = Path(__file__).resolve().parents[2] / "shared" / "testdata" / "ros2" / "talker_mcap"
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="module", params=DISTROS)
 def robot_services(
-    network: PrivateNetwork, robots: dict[str, str], tmp_path_factory: pytest.TempPathFactory
+    request: pytest.FixtureRequest,
+    network: PrivateNetwork,
+    robots: dict[str, str],
+    tmp_path_factory: pytest.TempPathFactory,
 ) -> Iterator[RclpyPeer]:
-    """A real rclpy node on the robot that listens, serves a SetBool service, parameters and an action."""
+    """A real rclpy node (Jazzy, then Kilted) on the robot that listens, serves a SetBool service,
+    parameters and an action."""
+    distro = str(request.param)
+    peer_python(distro)
     roles = ["--name", "robot_services", "--listen", "/laptop_says", "--listen", "/topic",
              "--service", "/robot_switch", "--params", "--action", "/fibonacci"]  # fmt: skip
-    peer = RclpyPeer("jazzy", robots, tmp_path_factory.mktemp("robot_services"), roles, on=network.robot)
+    peer = RclpyPeer(distro, robots, tmp_path_factory.mktemp("robot_services"), roles, on=network.robot)
     try:
         peer.wait_for("ready")
         yield peer
@@ -473,7 +479,8 @@ def test_ros2_verbs_across_the_link(
     defaults, against the real node on the robot."""
 
     def run(*args: str, timeout: float = 40) -> subprocess.CompletedProcess[str]:
-        return network.laptop.run(*laptop_command(backend, list(args), robots, tmp_path), timeout=timeout)
+        command = laptop_command(backend, list(args), robots, tmp_path, robot_services.distro)
+        return network.laptop.run(*command, timeout=timeout)
 
     said = f"from the laptop ({backend})"
     pub = run("topic", "pub", "--once", "/laptop_says", "std_msgs/msg/String", f"data: '{said}'")
