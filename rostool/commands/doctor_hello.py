@@ -15,7 +15,7 @@ from typing import Any
 
 import click
 
-from rostool.commands._common import print_json, ros2_backend, ros_version
+from rostool.commands._common import json_option, print_json, ros2_backend, ros_version
 from rostool.errors import RostoolError
 from rostool.graph.base import Received
 from rostool.graph.multicast import GROUP, PORT, joined_socket, send_datagram, sending_socket
@@ -125,7 +125,7 @@ Examples:
 @click.option("-1", "--once", is_flag=True, help="One hello, one emit period, one summary, then exit.")
 @click.option("-n", "--emits", type=click.IntRange(min=1), metavar="N",
               help="N hellos, then the last period's summary and exit (default: until Ctrl+C).")  # fmt: skip
-@click.option("--json", "as_json", is_flag=True, help="Each summary as one JSON object for scripts.")
+@json_option
 @click.pass_context
 def hello(
     ctx: click.Context, topic: str, emit_period: float, print_period: float, ttl: int | None, once: bool,

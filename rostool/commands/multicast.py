@@ -9,10 +9,10 @@ from __future__ import annotations
 
 import contextlib
 import ipaddress
-import json
 
 import click
 
+from rostool.commands._common import json_option, print_json
 from rostool.errors import RostoolError
 from rostool.graph.multicast import GROUP, PORT, joined_socket, send_datagram, sending_socket
 
@@ -82,7 +82,7 @@ Examples:
 @click.option("-t", "--timeout", type=click.FloatRange(0, min_open=True), metavar="S",
               help="Give up after S seconds without a datagram: one line on stderr, exit 1 "
               "(default: wait until Ctrl+C).")  # fmt: skip
-@click.option("--json", "as_json", is_flag=True, help="Print the datagram as one JSON object for scripts.")
+@json_option
 def receive(group: str, port: int, timeout: float | None, as_json: bool) -> None:
     """Wait for one UDP multicast datagram and print who sent it and what it says."""
     with joined_socket(group, port) as sock:
@@ -97,6 +97,6 @@ def receive(group: str, port: int, timeout: float | None, as_json: bool) -> None
             ) from None
     text = data.decode("utf-8", errors="backslashreplace")
     if as_json:
-        click.echo(json.dumps({"from": host, "port": sender_port, "data": text}, ensure_ascii=False))
+        print_json({"from": host, "port": sender_port, "data": text})
     else:
         click.echo(f"Received from {host}:{sender_port}: '{text}'")

@@ -7,6 +7,7 @@ import os
 from collections.abc import Mapping
 from typing import Any
 
+from rostool.errors import RostoolError
 from rostool.graph.rclpy.select import Choice
 
 # rmw_fastrtps_cpp is the default RMW of every distro rostool knows
@@ -42,13 +43,14 @@ def rclpy_distro(env: Mapping[str, str] = os.environ) -> tuple[str | None, str]:
 
 
 def rclpy_range(env: Mapping[str, str] = os.environ) -> tuple[str, str]:
-    """The discovery range as rmw reads it (ROS 2's default is SUBNET)."""
-    if env.get("ROS_LOCALHOST_ONLY", "").strip() == "1":
-        return "LOCALHOST", "ROS_LOCALHOST_ONLY=1 (deprecated)"
-    text = env.get("ROS_AUTOMATIC_DISCOVERY_RANGE", "").strip().upper()
-    if text:
-        return text, "ROS_AUTOMATIC_DISCOVERY_RANGE"
-    return "SUBNET", "ROS 2's default: ROS_AUTOMATIC_DISCOVERY_RANGE is unset"
+    """The discovery range as rmw reads it (ROS 2's default is SUBNET); a value rmw does not know is shown
+    as given: rmw itself says what is wrong with it."""
+    from rostool.graph.ros2_base.env import discovery_range_reason
+
+    try:
+        return discovery_range_reason(env)
+    except RostoolError:
+        return env["ROS_AUTOMATIC_DISCOVERY_RANGE"].strip().upper(), "ROS_AUTOMATIC_DISCOVERY_RANGE"
 
 
 def report(choice: Choice, env: Mapping[str, str] = os.environ) -> dict[str, Any]:

@@ -4,7 +4,6 @@ advertise. Each check is a `Check`; nothing here changes the graph."""
 
 from __future__ import annotations
 
-import os
 import time
 from concurrent.futures import ThreadPoolExecutor
 from urllib.parse import urlparse
@@ -36,10 +35,9 @@ def checks() -> list[Check]:
 
 def _advertised(master_host: str) -> Check:
     """The address this machine gives other nodes, and whether the master's machine can use it."""
-    for variable in ("ROS_HOSTNAME", "ROS_IP"):
-        value = os.environ.get(variable, "").strip()
-        if value:
-            return _judge(value, f"from {variable}", master_host)
+    pinned = env.pinned_host()
+    if pinned is not None:
+        return _judge(pinned[1], f"from {pinned[0]}", master_host)
     if env.is_loopback(master_host):
         return Check("advertised address", True, "127.0.0.1 (the master is on this machine's loopback)")
     host = env.advertised_host()

@@ -33,19 +33,28 @@ def is_loopback(host: str) -> bool:
     return host in ("localhost", "::1") or host.startswith("127.")
 
 
+def pinned_host() -> tuple[str, str] | None:
+    """(variable, value) of the name or address the user gave for this machine: ROS_HOSTNAME, else ROS_IP."""
+    for var in ("ROS_HOSTNAME", "ROS_IP"):
+        value = os.environ.get(var, "").strip()
+        if value:
+            return var, value
+    return None
+
+
 def advertised_host() -> str:
     """The host name peers use to reach us: ROS_HOSTNAME, else ROS_IP; else 127.0.0.1 for a master on
     loopback; else this machine's name, as rospy does, unless that name cannot take other machines back
     here (it resolves to loopback, as Debian's default /etc/hosts makes it, or not at all): then the source
     address of this machine's route to the master (what `ip route get <master>` says), said once on stderr."""
-    for var in ("ROS_HOSTNAME", "ROS_IP"):
-        value = os.environ.get(var, "").strip()
-        if value:
-            return value
+    pinned = pinned_host()
+    if pinned is not None:
+        return pinned[1]
     master_host = urlparse(master_uri()).hostname or "localhost"
     if is_loopback(master_host):
         return "127.0.0.1"
-    return _name_for_remote_master(master_host, urlparse(master_uri()).port or MASTER_PORT)
+    port = urlparse(master_uri()).port or MASTER_PORT
+    return _name_for_remote_master(master_host, port, f"the master at {master_host}", "the master")
 
 
 def resolve(host: str) -> str | None:
@@ -88,16 +97,17 @@ def served_name() -> str:
     """The name a server listening on every interface (`rostool core --host 0.0.0.0`) advertises:
     ROS_HOSTNAME, ROS_IP, else this machine's name, or when that name cannot take other machines back here,
     the source address of its default route (said once on stderr)."""
-    for var in ("ROS_HOSTNAME", "ROS_IP"):
-        value = os.environ.get(var, "").strip()
-        if value:
-            return value
+    pinned = pinned_host()
+    if pinned is not None:
+        return pinned[1]
     # 192.0.2.1 (TEST-NET-1) is never on a route of its own: the kernel answers with the default route
-    return _name_for_remote_master("192.0.2.1", MASTER_PORT, "other machines")
+    return _name_for_remote_master("192.0.2.1", MASTER_PORT, "other machines", "them")
 
 
 @functools.cache
-def _name_for_remote_master(master_host: str, master_port: int, whom: str = "") -> str:
+def _name_for_remote_master(master_host: str, master_port: int, whom: str, route_to: str) -> str:
+    """This machine's name, or when other machines cannot reach it by that name, the source address of its
+    route to `master_host`, said once (to `whom`, on the route to `route_to`)."""
     name = socket.gethostname()
     why = loopback_name(name)
     if why is None:
@@ -105,12 +115,10 @@ def _name_for_remote_master(master_host: str, master_port: int, whom: str = "") 
     address = route_source(master_host, master_port)
     if address is None or is_loopback(address):
         return name  # the master itself is on this machine (or unreachable): nothing better to offer
-    whom = whom or f"the master at {master_host}"
     sys.stderr.write(
         f"rostool: advertising {address} to {whom} for other nodes to call back: this machine's name "
         f"{name!r} {why}, which they cannot reach ({address} is this machine's address on its route to "
-        f"{'them' if whom == 'other machines' else 'the master'}); set ROS_IP={address} to pin it, or "
-        "ROS_IP/ROS_HOSTNAME to choose another\n"
+        f"{route_to}); set ROS_IP={address} to pin it, or ROS_IP/ROS_HOSTNAME to choose another\n"
     )
     return address
 

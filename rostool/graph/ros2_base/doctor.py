@@ -109,7 +109,7 @@ def interfaces() -> list[tuple[str, str]]:
     return found
 
 
-IFF_UP, IFF_LOOPBACK, IFF_RUNNING, IFF_MULTICAST = 0x1, 0x8, 0x40, 0x1000
+IFF_UP, IFF_RUNNING, IFF_MULTICAST = 0x1, 0x40, 0x1000
 LOOP_GROUP = "239.255.0.250"  # a group of the organisation-local scope no ROS vendor uses
 
 
