@@ -7,6 +7,8 @@ a public API; this builds the same store: the source's definitions with the othe
 
 from __future__ import annotations
 
+from typing import Any
+
 from rosbags.typesys.store import Typestore
 
 
@@ -15,21 +17,53 @@ class CrossVersionStores:
 
     def __init__(self, dst_version: int) -> None:
         self.dst_version = dst_version
-        self._stores: dict[int, Typestore] = {}
+        self._stores: dict[int, tuple[Typestore, dict[str, Any]]] = {}
 
     def store_for(self, src: Typestore, src_msgtype: str, dst_msgtype: str) -> Typestore:
         from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
-        store = self._stores.get(id(src))
-        if store is None:
-            other = Stores.ROS2_FOXY if self.dst_version == 2 else Stores.ROS1_NOETIC
-            header = get_typestore(other).fielddefs["std_msgs/msg/Header"]
-            store = get_typestore(Stores.EMPTY)
-            store.register({**src.fielddefs, "std_msgs/msg/Header": header})
-            self._stores[id(src)] = store
+        known = self._stores.get(id(src))
+        if known is None:
+            header = get_types_from_msg(_HEADER_FIELDS[self.dst_version], HEADER)[HEADER]
+            known = self._stores[id(src)] = (get_typestore(Stores.EMPTY), {**src.fielddefs, HEADER: header})
+        store, fielddefs = known
         if dst_msgtype not in store.fielddefs:
+            # Only the types this one uses: registering a whole source store (a distro's hundreds of
+            # types) costs rosbags a generated class each, seconds on a loaded machine, and the first
+            # message of a recording waits for it.
+            wanted = _uses(fielddefs, src_msgtype)
+            store.register({name: fielddefs[name] for name in wanted if name not in store.fielddefs})
+        if dst_msgtype not in store.fielddefs:  # a renamed type (tf/tfMessage -> tf2_msgs/msg/TFMessage)
             text = src.generate_msgdef(src_msgtype, ros_version=self.dst_version)[0]
             typs = get_types_from_msg(text, dst_msgtype)
-            typs.pop("std_msgs/msg/Header", None)
-            store.register(typs)
+            typs.pop(HEADER, None)  # the other version's, registered with the types that use it
+            store.register({name: typ for name, typ in typs.items() if name not in store.fielddefs})
         return store
+
+
+HEADER = "std_msgs/msg/Header"
+# The one type whose layout differs between the versions, as each defines it. Written out because reading
+# it from rosbags' store of a distro imports that store's module (hundreds of classes, 0.2 s).
+_HEADER_FIELDS = {
+    1: "uint32 seq\nbuiltin_interfaces/Time stamp\nstring frame_id\n",
+    2: "builtin_interfaces/Time stamp\nstring frame_id\n",
+}
+
+
+def _uses(fielddefs: dict[str, Any], msgtype: str) -> list[str]:
+    """`msgtype` and every type its fields use, at any depth, by rosbags' field definitions."""
+    from rosbags.interfaces import Nodetype
+
+    found: list[str] = []
+    todo = [msgtype]
+    while todo:
+        name = todo.pop()
+        if name in found or name not in fielddefs:
+            continue
+        found.append(name)
+        for _field, (kind, detail) in fielddefs[name][1]:
+            if kind in (Nodetype.ARRAY, Nodetype.SEQUENCE):
+                kind, detail = detail[0]
+            if kind == Nodetype.NAME:
+                todo.append(detail)
+    return found
