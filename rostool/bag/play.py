@@ -39,6 +39,7 @@ from rostool.bag.reader import BagReader
 from rostool.bag.schedule import PlayClock, sleep_until
 from rostool.errors import RostoolError
 from rostool.graph.base import Graph
+from rostool.graph.publishing import match_known_subscribers, unmatched_warning
 from rostool.interfaces.names import to_ros1_name
 from rostool.interfaces.ros1 import Ros1Type, builtin_store
 
@@ -65,6 +66,7 @@ class PlayOptions:
     remap: Mapping[str, str] = field(default_factory=dict)
     keep_alive: bool = False
     wait_for_subscribers: bool = False
+    match_wait: float = 3.0  # seconds the first message waits for the subscribers the graph shows (0: none)
     pause: bool = False  # start paused (space resumes)
     immediate: bool = False  # no waiting between messages
     prefix: str = ""  # prepended to every bag topic, before remapping
@@ -314,6 +316,10 @@ class Player(PlayControls):
             for publisher, _md5 in self._publishers.values():
                 while not publisher.wait_for_subscribers(1, 0.1):
                     self._commands(time.perf_counter())
+        publishers = {topic: publisher for topic, (publisher, _key) in self._publishers.items()}
+        unmatched = match_known_subscribers(self.graph, publishers, options.match_wait)
+        if unmatched:
+            self.warn(unmatched_warning(unmatched, options.match_wait))
         if not self.console.keyboard:
             self.console.say("")
         elif self.console.form == "ros2 bag":

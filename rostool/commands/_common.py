@@ -120,6 +120,18 @@ def stdout_is_tty() -> bool:
 
 
 json_option = click.option("--json", "as_json", is_flag=True, help="Print JSON for scripts.")
+# graph/publishing.match_known_subscribers: the first message waits for the subscribers the graph shows
+match_wait_option = click.option(
+    "--match-wait", type=click.FloatRange(min=0), default=3.0, show_default=True, metavar="S",
+    help="Wait at most S seconds for the subscribers the graph shows to match before the first message "
+    "(0: do not wait).",
+)  # fmt: skip
+
+
+def warn_line(text: str) -> None:
+    """One `rostool: warning: ...` line on stderr: the command goes on."""
+    click.echo(f"rostool: warning: {text}", err=True)
+
 
 interfaces_option = click.option(
     "--interfaces",

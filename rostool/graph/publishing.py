@@ -4,7 +4,7 @@ loop), or at a rate a number of times after waiting for subscriptions (ros2 topi
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -43,16 +43,16 @@ def publish_loop(
     count: int | None,
     file: str | None,
     say: Callable[[str], None],
+    match_wait: float = MATCH_WAIT_SECONDS,
+    warn: Callable[[str], None] = lambda _text: None,
 ) -> None:
     raw = _file_messages(file) if file else [message_args(values)]
     messages = [graph.build_message(type_name, value) for value in raw]
     latched = latch or rate is None
     publisher = graph.publisher(topic, type_name, latch=latched)
-    finite = rate is None or once or count is not None or file is not None
-    if graph.ros_version == 2 and finite:
-        # A volatile ROS 2 subscriber gets nothing published before it matched (latching only serves
-        # transient_local ones), so wait for the subscribers discovery shows, as ros2 topic pub -1 does.
-        _wait_for_known_subscribers(graph, publisher, MATCH_WAIT_SECONDS)
+    # A subscriber gets nothing published before it matched (ROS 1: connected; latching only serves
+    # transient_local ones in ROS 2), so the first message waits for the subscribers the graph shows.
+    _match_or_warn(graph, publisher, match_wait, warn)
     if rate is None and not file:
         publisher.publish(messages[0])
         if once:
@@ -79,18 +79,53 @@ def _linger(graph: Graph, publisher: Any, seconds: float) -> None:
     time.sleep(max(0.0, deadline - time.monotonic()))
 
 
-def _wait_for_known_subscribers(graph: Graph, publisher: Any, seconds: float, least: int = 0) -> None:
-    """Wait for the event itself: every subscriber the graph knows of has matched this publisher (its
-    matched count). `seconds` bounds only that wait, counted once the graph has answered: a direct ROS 2
-    listing spends its own discovery time first, and a subscriber it lists still has to discover this
-    new publisher (Fast DDS: on its next announcement), so a window that included the listing ran out
-    before the match and the message went to nobody. `least`: wait for at least that many matches even
-    when the graph lists fewer."""
+def _wait_for_known_subscribers(graph: Graph, publisher: Any, seconds: float) -> None:
+    match_known_subscribers(graph, {publisher.topic: publisher}, seconds)
+
+
+def _match_or_warn(
+    graph: Graph, publisher: Any, seconds: float, warn: Callable[[str], None], least: int = 0
+) -> None:
+    """`match_known_subscribers` for one publisher, warning about what did not match. `least`: wait for
+    at least that many matches even when the graph lists fewer."""
+    unmatched = match_known_subscribers(graph, {publisher.topic: publisher}, seconds, least)
+    if unmatched:
+        warn(unmatched_warning(unmatched, seconds))
+
+
+def match_known_subscribers(
+    graph: Graph, publishers: Mapping[str, Any], seconds: float, least: int = 0
+) -> list[str]:
+    """Wait for the event itself: each publisher (topic -> publisher) has matched every subscriber the
+    graph shows on its topic (its matched count), so a volatile subscriber that was there before rostool
+    gets the first message too. `seconds` bounds only that wait, counted once the graph has answered: a
+    direct ROS 2 listing spends its own discovery time first, and a subscriber it lists still has to
+    discover this new publisher (Fast DDS: on its next announcement), so a window that included the
+    listing ran out before the match and the message went to nobody. Returns, for each topic where some
+    did not match in time, `/topic (node, ...)`, to warn about."""
+    if seconds <= 0 or not publishers:
+        return []
     try:
-        wanted = len(next((t.subscribers for t in graph.topics() if t.name == publisher.topic), []))
+        subscribers = {t.name: t.subscribers for t in graph.topics() if t.name in publishers}
     except RostoolError:  # nobody else in the graph (ROS 2: no participant answered in its window)
-        return
-    publisher.wait_for_subscribers(max(wanted, least), seconds)
+        return []
+    deadline = time.monotonic() + seconds
+    unmatched = []
+    for topic, publisher in publishers.items():
+        known = subscribers.get(topic, [])
+        wanted = max(len(known), least)
+        matched = not wanted or publisher.wait_for_subscribers(wanted, max(0.0, deadline - time.monotonic()))
+        if not matched and known:  # `least` alone is a hope, not a subscriber that is there
+            unmatched.append(f"{topic} ({', '.join(known)})")
+    return unmatched
+
+
+def unmatched_warning(unmatched: list[str], seconds: float) -> str:
+    """One line naming what never matched (`match_known_subscribers`), and how to change the wait."""
+    return (
+        f"not every subscriber had matched within {seconds:g} s, publishing anyway: "
+        f"{'; '.join(unmatched)} (--match-wait S waits longer, 0 not at all)"
+    )
 
 
 def _paced(period: float, total: int | None, publish: Callable[[int], None]) -> None:
@@ -127,6 +162,8 @@ def publish_ros2(
     plan: Ros2Publication,
     say: Callable[[str], None],
     on_sent: Callable[[int, Any], None] | None,
+    match_wait: float = MATCH_WAIT_SECONDS,
+    warn: Callable[[str], None] = lambda _text: None,
 ) -> None:
     """ros2 topic pub: wait for subscriptions, publish at the rate; `on_sent(count, message)` after each
     message (when given, "publisher: beginning loop" is said first)."""
@@ -142,13 +179,13 @@ def publish_ros2(
                 raise RostoolError(f"timed out waiting for {plan.wait_matching} matching subscription(s)")
             say(f"Waiting for at least {plan.wait_matching} matching subscription(s)...")
             wait = 1.0
-    elif plan.total is not None:
+    else:
         # a volatile subscriber gets nothing published before it matched: wait for the ones the graph
-        # knows and, as ros2 topic pub -1/-t does, for at least one (a direct listing may not know of a
-        # subscriber yet) unless -w 0 said not to
-        least = 0 if plan.wait_matching == 0 else 1
-        seconds = MATCH_WAIT_SECONDS if plan.max_wait is None else min(plan.max_wait, MATCH_WAIT_SECONDS)
-        _wait_for_known_subscribers(graph, publisher, seconds, least)
+        # knows (every form: the first message of a 1 Hz loop counts too) and, as ros2 topic pub -1/-t
+        # does, for at least one (a direct listing may not know of a subscriber yet) unless -w 0 said not to
+        least = 1 if plan.total is not None and plan.wait_matching is None else 0
+        seconds = match_wait if plan.max_wait is None else min(plan.max_wait, match_wait)
+        _match_or_warn(graph, publisher, seconds, warn, least)
     if on_sent is not None:
         say("publisher: beginning loop")
 

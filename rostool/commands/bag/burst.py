@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import click
 
+from rostool.commands._common import match_wait_option
 from rostool.commands.bag._flags import ListCommand, parsed_into
 from rostool.commands.bag._options import CONTEXT, topic_list
 from rostool.errors import RostoolError
@@ -26,6 +27,7 @@ class BurstFlags:
     num_messages: int
     delay: float
     wait_for_subscribers: bool
+    match_wait: float
     quiet: bool
     distro: str
 
@@ -58,6 +60,7 @@ class BurstFlags:
               help="rostool: wait S seconds after advertising, so subscribers can connect.")  # fmt: skip
 @click.option("--wait-for-subscribers", is_flag=True,
               help="rostool: wait for a subscriber on every topic first.")  # fmt: skip
+@match_wait_option
 @click.option("-q", "--quiet", is_flag=True, help="rostool: no warnings.")
 @click.option("--distro", type=click.Choice(sorted(DISTROS)), default=DEFAULT_DISTRO, show_default=True,
               help="rostool: ROS 2 type store for bags that carry no message definitions.")  # fmt: skip
@@ -87,6 +90,7 @@ def burst(ctx: click.Context, flags: BurstFlags) -> None:
         remap=parse_remaps(topic_list(flags.remap)),
         delay=flags.delay,
         wait_for_subscribers=flags.wait_for_subscribers,
+        match_wait=flags.match_wait,
         max_messages=flags.num_messages or None,
     )
     request = PlayRequest(

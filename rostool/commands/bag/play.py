@@ -6,6 +6,7 @@ from collections.abc import Sequence
 
 import click
 
+from rostool.commands._common import match_wait_option
 from rostool.commands.bag._options import CONTEXT, distro_option, topic_list, topics_option
 from rostool.errors import RostoolError
 
@@ -28,6 +29,7 @@ from rostool.errors import RostoolError
 @click.option("-d", "--delay", type=click.FloatRange(min=0), default=0.2, show_default=True, metavar="S",
               help="Wait S seconds after advertising, so subscribers can connect.")  # fmt: skip
 @click.option("--wait-for-subscribers", is_flag=True, help="Wait for a subscriber on every topic first.")
+@match_wait_option
 @click.option("--pause", is_flag=True, help="Start paused (space resumes; needs a terminal).")
 @click.option("-i", "--immediate", is_flag=True, help="Publish all messages without waiting.")
 @click.option("-k", "--keep-alive", is_flag=True, help="Keep the (latched) publishers alive at the end.")
@@ -53,6 +55,7 @@ def play(
     hz: float | None,
     delay: float,
     wait_for_subscribers: bool,
+    match_wait: float,
     pause: bool,
     immediate: bool,
     keep_alive: bool,
@@ -97,6 +100,7 @@ def play(
         clock=clock,
         keep_alive=keep_alive,
         wait_for_subscribers=wait_for_subscribers,
+        match_wait=match_wait,
         hz=hz or 100.0,  # rosbag's rate; on a ROS 2 graph rosbag2's (ros2_hz)
         delay=delay,
         pause=pause,

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 
 import click
 
+from rostool.commands._common import match_wait_option
 from rostool.commands.bag._flags import ListCommand, parsed_into
 from rostool.commands.bag._options import CONTEXT, topic_list
 from rostool.errors import RostoolError
@@ -50,6 +51,7 @@ class PlayFlags:
     immediate: bool
     keep_alive: bool
     wait_for_subscribers: bool
+    match_wait: float
     prefix: str
     skip_empty: float | None
     distro: str
@@ -128,6 +130,7 @@ PLAY_LISTS = (
               help="rostool: /clock rate with --clock given alone.")  # fmt: skip
 @click.option("--immediate", is_flag=True, help="rostool: publish all messages without waiting.")
 @click.option("-k", "--keep-alive", is_flag=True, help="rostool: keep the publishers alive at the end.")
+@match_wait_option
 @click.option("--wait-for-subscribers", is_flag=True, help="rostool: wait for a subscriber on every topic.")
 @click.option("--prefix", default="", metavar="PREFIX", help="rostool: prefix every topic (before --remap).")
 @click.option("--skip-empty", type=click.FloatRange(min=0, min_open=True), metavar="SEC",
@@ -184,6 +187,7 @@ def play(ctx: click.Context, flags: PlayFlags) -> None:
         immediate=flags.immediate,
         keep_alive=flags.keep_alive,
         wait_for_subscribers=flags.wait_for_subscribers,
+        match_wait=flags.match_wait,
         remap=parse_remaps(topic_list(flags.remap)),
         prefix=flags.prefix,
         skip_empty=flags.skip_empty,

@@ -9,7 +9,14 @@ from typing import Any
 
 import click
 
-from rostool.commands._common import ignored_ros2_options, interfaces_option, open_live_graph, ros_version
+from rostool.commands._common import (
+    ignored_ros2_options,
+    interfaces_option,
+    match_wait_option,
+    open_live_graph,
+    ros_version,
+    warn_line,
+)
 from rostool.commands._qos import topic_qos_options
 from rostool.errors import RostoolError
 from rostool.graph.qos import QosRequest
@@ -43,6 +50,7 @@ from rostool.graph.qos import QosRequest
 @click.option("-f", "--file", "file", type=click.Path(exists=True, dir_okay=False),
               help="YAML messages separated by ---.")  # fmt: skip
 @click.option("-q", "--quiet", is_flag=True, help="Print nothing.")
+@match_wait_option
 @interfaces_option
 @ignored_ros2_options("spin_time", "use_sim_time")
 @click.pass_context
@@ -51,7 +59,7 @@ def pub(
     ctx: click.Context, name: str, type_name: str, values: tuple[str, ...], rate: float | None, once: bool,
     latch: bool, n_value: str | None, count: int | None, node_name: str | None, times: int | None,
     wait_matching: int | None, max_wait: float | None, keep_alive: float, print_nth: int, from_stdin: bool,
-    file: str | None, quiet: bool, interface_paths: tuple[str, ...], qos: QosRequest,
+    file: str | None, quiet: bool, match_wait: float, interface_paths: tuple[str, ...], qos: QosRequest,
 ) -> None:  # fmt: skip
     """Publish a message given as YAML (missing fields get defaults).
 
@@ -61,7 +69,8 @@ def pub(
     `header: auto` sets the header's stamp to now, as ros2 topic pub does.
 
     Under ROS 1 without -r the message is published once and latched (rostopic pub); under ROS 2 it is
-    published at 1 Hz until -1/-t/Ctrl+C (ros2 topic pub), printing `publishing #N: ...`.
+    published at 1 Hz until -1/-t/Ctrl+C (ros2 topic pub), printing `publishing #N: ...`. The first
+    message waits until every subscriber the graph shows has matched (at most --match-wait s).
 
     \b
     Examples:
@@ -87,17 +96,17 @@ def pub(
     try:
         graph.use_qos(qos)
         say: Callable[[str], None] = (lambda _t: None) if quiet else click.echo
+        warn = (lambda _t: None) if quiet else warn_line
         if graph.style == "ros2" and not latch and not file:
             total = 1 if once else times if times is not None else count
             wait_matching = _ros2_wait(wait_matching, max_wait, once or times is not None)
             plan = Ros2Publication(rate or 1.0, total, wait_matching, max_wait, keep_alive)
-            publish_ros2(
-                graph, name, type_name, values, plan, click.echo, _printer(0 if quiet else print_nth)
-            )
+            printer = _printer(0 if quiet else print_nth)
+            publish_ros2(graph, name, type_name, values, plan, click.echo, printer, match_wait, warn)
             return
         publish_loop(
             graph, name, type_name, values, rate=rate, once=once, latch=latch, count=count or times,
-            file=file, say=say,
+            file=file, say=say, match_wait=match_wait, warn=warn,
         )  # fmt: skip
     finally:
         graph.close()

@@ -1,0 +1,38 @@
+"""Nothing lost at the start (issue 37): `bag play` and `topic pub` publish their first message only once
+their writer has matched the subscriptions the graph showed when they started (at most --match-wait s).
+Referee: a real rclpy node that subscribed before rostool started, counting what it heard, on Jazzy and
+Kilted, through both backends. Without the wait, a Fast DDS subscriber missed the first messages: 8/10 of
+a played bag, 3 of a 1 Hz `--ros2 topic pub` that ran 4.5 s."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+
+from tests.ros2_backends import Tool, ToolPopen
+from tests.ros2_peers import RclpyPeer
+from tests.support import TESTDATA, stop
+
+TALKER = TESTDATA / "ros2" / "talker_mcap"  # /topic: 'Hello, world! 0' .. 9, one a second
+
+
+def test_play_and_pub_reach_a_subscriber_that_was_there_from_the_first_message(
+    tool: Tool, tool_popen: ToolPopen, start_peer: Callable[..., RclpyPeer]
+) -> None:
+    listener = start_peer("--name", "listener", "--listen", "/topic")
+    played = tool(["--ros2", "bag", "play", "-r", "5", "--topics", "/topic", str(TALKER)])
+    assert played.returncode == 0, played.stderr
+    expected = [f"Hello, world! {i}" for i in range(10)]
+    listener.wait_for("heard", lambda e: e["data"] == expected[-1], timeout=10)
+    assert [e["data"] for e in listener.of("heard")] == expected
+
+    # ros2 topic pub's form (1 Hz until Ctrl+C): stopped 0.3 s after it said it published #3, the
+    # listener must have heard all three
+    pub = tool_popen(["--ros2", "topic", "pub", "/topic", "std_msgs/msg/String", "data: pub"])
+    assert pub.stdout is not None
+    third = next((line for line in pub.stdout if line.startswith("publishing #3:")), None)
+    time.sleep(0.3)
+    _out, err = stop(pub)
+    assert third, err
+    heard = [e for e in listener.of("heard") if e["data"] == "pub"]
+    assert len(heard) == 3, (heard, err)
