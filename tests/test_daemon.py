@@ -312,3 +312,29 @@ def test_a_peer_killed_with_sigkill_is_never_listed_after_its_lease(
         listed = tool(args)
         assert listed.returncode == 0 and gone not in listed.stdout.split(), (args, listed.stdout)
     assert tool(["node", "list"]).stdout.split() == ["/keeper"]
+
+
+def test_a_daemon_a_verb_started_ends_sooner_when_idle_and_status_says_so(graph_env: dict[str, str]) -> None:
+    """Issue 37: daemons a verb starts (one per domain, backend and environment) end after 900 s without a
+    query or relay, so they do not pile up; one started by `daemon start` keeps ros2's 7200 s."""
+    env = graph_env
+    rostool(["node", "list"], env)  # a cold call (of an empty graph: exit 1) starts the daemon for itself
+    assert wait_until(lambda: status(env)["running"] is True, timeout=30)
+    found = status(env)
+    assert (found["auto_started"], found["idle_exit"]) == (True, 900)
+    text = rostool(["daemon", "status"], env).stdout
+    assert "  exits after: 900 s without a query or relay (started by a verb; idle for " in text, text
+    assert rostool(["daemon", "stop"], env).returncode == 0
+    found = started(env)
+    assert (found["auto_started"], found["idle_exit"]) == (False, 7200)
+    assert rostool(["daemon", "stop"], env).returncode == 0
+
+    short = {**env, "ROSTOOL_DAEMON_IDLE": "3"}  # the user's own choice, for both kinds
+    rostool(["node", "list"], short)
+    logs = Path(env["XDG_STATE_HOME"]) / "rostool"
+
+    def ended_idle() -> bool:
+        return any("idle for 3 s: exiting" in log.read_text() for log in logs.glob("*.log"))
+
+    assert wait_until(ended_idle, timeout=40)  # gone by itself
+    assert status(short)["running"] is False

@@ -107,3 +107,7 @@ def status(as_json: bool) -> None:
     relays = found.get("relays") or []
     click.echo(f"  relays: {len(relays)}" + (f" ({', '.join(relays)})" if relays else ""))
     click.echo(f"  queries answered: {found.get('queries', 0)}")
+    if "idle_exit" in found:  # a daemon of an older build does not say
+        by = "started by a verb" if found.get("auto_started") else "started by `daemon start`"
+        click.echo(f"  exits after: {found['idle_exit']:g} s without a query or relay ({by}; "
+                   f"idle for {found['idle']:.1f} s)")  # fmt: skip

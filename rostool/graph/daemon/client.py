@@ -168,8 +168,11 @@ class DaemonClient:
     def _cold_path(self) -> str:
         return str(self.place.lock.with_name(f"{self.place.name}.cold"))
 
-    def start_detached(self, idle: float | None = None, replacing: bool = False) -> subprocess.Popen[bytes]:
-        """Start the daemon in its own session, its output in its log; the caller does not wait for it."""
+    def start_detached(
+        self, idle: float | None = None, replacing: bool = False, auto: bool = False
+    ) -> subprocess.Popen[bytes]:
+        """Start the daemon in its own session, its output in its log; the caller does not wait for it.
+        `auto`: a verb starts it for itself (it then ends sooner when idle: server.AUTO_IDLE_SECONDS)."""
         log_dir = private_dir(state_dir(self.env))
         # glibc's per-thread malloc arenas (DDS runs many threads) grow a long-lived process's RSS slowly
         # under churn (about 0.1 MiB a minute in bench/soak_daemon.py); two arenas keep it flat
@@ -179,6 +182,8 @@ class DaemonClient:
             args += ["--idle", str(idle)]
         if replacing:
             args.append("--replace")
+        if auto:
+            args.append("--auto")
         # the daemon keeps this process's cold-call claim: the calls waiting for it go on waiting after
         # this process has ended, until it serves (or ends)
         claim = (self._cold.fileno(),) if self._cold is not None else ()

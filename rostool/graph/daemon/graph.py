@@ -241,11 +241,11 @@ class DaemonGraph:
         return None
 
     def _replace(self) -> None:
-        self._client.start_detached(replacing=True)  # it waits for the old one's lock
+        self._client.start_detached(replacing=True, auto=True)  # it waits for the old one's lock
 
     def _start(self) -> None:
         if self._client.lock_holder() is None:
-            self._client.start_detached()
+            self._client.start_detached(auto=True)
 
     def _warn_silent(self, err: DaemonSilent) -> None:
         self._warn(f"the graph daemon did not answer ({err}); answering directly "

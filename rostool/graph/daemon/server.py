@@ -31,7 +31,10 @@ from rostool.graph.daemon.place import DaemonPlace, build_id, daemon_place
 from rostool.graph.daemon.queries import SERVED
 from rostool.graph.daemon.relay_server import Relay, qos_of
 
-DEFAULT_IDLE_SECONDS = 7200.0  # as ros2 daemon's default timeout
+DEFAULT_IDLE_SECONDS = 7200.0  # `daemon start`: as ros2 daemon's default timeout
+# A daemon a verb started by itself: a user who moves between domains, backends or environments starts
+# one per key, and two hours of each piled up (11 daemons of 34-60 MB after an hour of checks).
+AUTO_IDLE_SECONDS = 900.0
 IDLE_ENV = "ROSTOOL_DAEMON_IDLE"
 LOCK_WAIT_SECONDS = 10.0  # a replaced daemon's time to go
 CLIENT_SECONDS = 5.0  # how long one client may take to send its request or read the answer
@@ -42,10 +45,11 @@ log = logging.getLogger("rostool.daemon")
 
 
 class Daemon:
-    def __init__(self, place: DaemonPlace, requested: str, idle: float) -> None:
+    def __init__(self, place: DaemonPlace, requested: str, idle: float, auto: bool = False) -> None:
         self.place = place
         self.requested = requested
         self.idle = idle
+        self.auto = auto  # started by a verb, not by `daemon start`
         self.build = build_id()
         self.started = time.monotonic()
         self.last_request = self.started
@@ -145,7 +149,8 @@ class Daemon:
             "domain": int(dict(self.place.fields)["domain"]), "uptime": uptime,
             "build": self.build, "log": str(self.place.log), "graph": size, "key": dict(self.place.fields),
             "relays": sorted(relay.topic for relay in list(self.relays)), "memory": memory(),
-            "queries": self.queries,
+            "queries": self.queries, "idle_exit": self.idle, "auto_started": self.auto,
+            "idle": round(time.monotonic() - self.last_request, 3),
         }  # fmt: skip
 
     # --- the socket ------------------------------------------------------------------------------
@@ -269,10 +274,10 @@ def _setup_log() -> None:
     )
 
 
-def run(requested: str, idle: float, replacing: bool = False) -> int:
+def run(requested: str, idle: float, replacing: bool = False, auto: bool = False) -> int:
     place = daemon_place(requested)
     _setup_log()
-    daemon = Daemon(place, requested, idle)
+    daemon = Daemon(place, requested, idle, auto)
     signal.signal(signal.SIGTERM, lambda *_: daemon.stopping.set())
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # detached: only `daemon stop` or SIGTERM end it
     signal.signal(signal.SIGHUP, signal.SIG_IGN)
@@ -297,7 +302,11 @@ def run(requested: str, idle: float, replacing: bool = False) -> int:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m rostool.graph.daemon")
     parser.add_argument("--backend", choices=("auto", "rclpy", "dds"), default="auto")
-    parser.add_argument("--idle", type=float, default=float(os.environ.get(IDLE_ENV) or DEFAULT_IDLE_SECONDS))
+    parser.add_argument("--idle", type=float, help="exit after S seconds without a query or relay")
     parser.add_argument("--replace", action="store_true", help="wait for the daemon being replaced")
+    parser.add_argument("--auto", action="store_true", help="started by a verb, not by `daemon start`")
     args = parser.parse_args(argv)
-    return run(args.backend, args.idle, args.replace)
+    idle = args.idle
+    if idle is None:
+        idle = float(os.environ.get(IDLE_ENV) or (AUTO_IDLE_SECONDS if args.auto else DEFAULT_IDLE_SECONDS))
+    return run(args.backend, idle, args.replace, args.auto)
