@@ -251,7 +251,7 @@ def test_doctor_names_the_domain_in_use(
     on that domain's discovery port), names it and its host, and fails in one line; an empty listing with a
     participant of this machine elsewhere says where, in its one error line."""
     domain = int(robots["ROS_DOMAIN_ID"])
-    wrong = {**robots, "ROS_DOMAIN_ID": str(domain + 101 if domain < 100 else domain - 101)}
+    wrong = {**robots, "ROS_DOMAIN_ID": str(domain + 101 if domain <= 100 else domain - 101)}  # 0..232
     doctor = [sys.executable, "-m", "rostool", "--ros2", "doctor"]
     failed = network.laptop.run(doctor, wrong)
     assert failed.returncode == 1, failed.stdout + failed.stderr

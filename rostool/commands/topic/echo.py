@@ -13,6 +13,8 @@ from rostool.commands._qos import topic_qos_options
 from rostool.errors import RostoolError
 from rostool.graph.qos import QosRequest
 
+NO_TYPE = "Could not determine the type for the passed topic"  # ros2 topic echo's error, word for word
+
 
 @click.command("echo")
 @click.argument("name")
@@ -83,25 +85,32 @@ def echo(
             )
         form = EchoForm(fields, as_json, as_csv, noarr, nostr, truncate_length, full_length, flow_style, raw)
         render = echo_renderer(graph.style, graph.types, form)
-        if graph.topic_type(name) is None:
+        unknown = message_type is None and graph.topic_type(name) is None  # ros2 looks only without TYPE
+        if unknown and timeout is None:
             # ros2 topic echo gives up here ("Could not determine the type"); rostool waits for a
-            # publisher to tell it (or --timeout ends it), as it did since it could learn types
+            # publisher to tell it, as it did since it could learn types
             click.echo(f"WARNING: topic [{name}] does not appear to be published yet", err=True)
         inbox = Inbox(graph, name)
         shown = 0
-        for received in inbox.messages(timeout, on_idle=out.flush):
-            message: Any = None
-            if keep is not None or not raw:
-                message = decoded(received, name)
-            if keep is not None and not keep(message):
-                continue
-            if include_message_info:
-                info = {"received_timestamp": received.recv_time_ns}
-                out.write(f"---Got new message, message info:---\n{info}\n")
-            out.write(render(received, message) + "\n")
-            shown += 1
-            if interactive:
-                out.flush()
-            if limit is not None and shown >= limit:
-                break
+        try:
+            for received in inbox.messages(timeout, on_idle=out.flush):
+                message: Any = None
+                if keep is not None or not raw:
+                    message = decoded(received, name)
+                if keep is not None and not keep(message):
+                    continue
+                if include_message_info:
+                    info = {"received_timestamp": received.recv_time_ns}
+                    out.write(f"---Got new message, message info:---\n{info}\n")
+                out.write(render(received, message) + "\n")
+                shown += 1
+                if interactive:
+                    out.flush()
+                if limit is not None and shown >= limit:
+                    break
+        except RostoolError:
+            if unknown and graph.topic_type(name) is None:  # --timeout ran out before any publisher came
+                click.echo(NO_TYPE, err=True)  # ros2's one line and exit status
+                ctx.exit(1)
+            raise
         out.flush()
