@@ -39,7 +39,7 @@ from rostool.bag.reader import BagReader
 from rostool.bag.schedule import PlayClock, sleep_until
 from rostool.errors import RostoolError
 from rostool.graph.base import Graph
-from rostool.graph.publishing import match_known_subscribers, unmatched_warning
+from rostool.graph.publishing import MATCH_WAIT_SECONDS, match_known_subscribers, unmatched_warning
 from rostool.interfaces.names import to_ros1_name
 from rostool.interfaces.ros1 import Ros1Type, builtin_store
 
@@ -66,7 +66,7 @@ class PlayOptions:
     remap: Mapping[str, str] = field(default_factory=dict)
     keep_alive: bool = False
     wait_for_subscribers: bool = False
-    match_wait: float = 3.0  # seconds the first message waits for the subscribers the graph shows (0: none)
+    match_wait: float = MATCH_WAIT_SECONDS  # for the subscribers the graph shows, before the first message
     pause: bool = False  # start paused (space resumes)
     immediate: bool = False  # no waiting between messages
     prefix: str = ""  # prepended to every bag topic, before remapping

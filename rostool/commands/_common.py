@@ -121,6 +121,7 @@ def stdout_is_tty() -> bool:
 
 json_option = click.option("--json", "as_json", is_flag=True, help="Print JSON for scripts.")
 # graph/publishing.match_known_subscribers: the first message waits for the subscribers the graph shows
+# (the default is publishing.MATCH_WAIT_SECONDS, not imported here: every verb's start-up loads this module)
 match_wait_option = click.option(
     "--match-wait", type=click.FloatRange(min=0), default=3.0, show_default=True, metavar="S",
     help="Wait at most S seconds for the subscribers the graph shows to match before the first message "

@@ -16,7 +16,7 @@ from rostool.graph.base import Graph
 from rostool.interfaces.values import message_args
 
 ONCE_LATCH_SECONDS = 3.0
-MATCH_WAIT_SECONDS = 3.0  # ROS 2: how long a finite publication waits for the subscribers discovered to match
+MATCH_WAIT_SECONDS = 3.0  # how long a first message waits for the subscribers the graph shows (--match-wait)
 
 
 def _file_messages(path: str) -> list[Any]:
