@@ -7,11 +7,12 @@ a played bag, 3 of a 1 Hz `--ros2 topic pub` that ran 4.5 s."""
 from __future__ import annotations
 
 import time
+import xmlrpc.client
 from collections.abc import Callable
 
 from tests.ros2_backends import Tool, ToolPopen
 from tests.ros2_peers import RclpyPeer
-from tests.support import TESTDATA, stop
+from tests.support import TESTDATA, rostool, stop
 
 TALKER = TESTDATA / "ros2" / "talker_mcap"  # /topic: 'Hello, world! 0' .. 9, one a second
 
@@ -36,3 +37,24 @@ def test_play_and_pub_reach_a_subscriber_that_was_there_from_the_first_message(
     assert third, err
     heard = [e for e in listener.of("heard") if e["data"] == "pub"]
     assert len(heard) == 3, (heard, err)
+
+
+def test_a_subscriber_that_never_connects_is_named_in_one_warning(debian_master: dict[str, str]) -> None:
+    """ROS 1: a subscriber the master lists whose node cannot be reached (registered at Debian's rosmaster
+    with an address nobody serves) never connects: `topic pub` waits --match-wait seconds, then publishes
+    anyway with one warning naming it; --match-wait 0 does not wait or warn."""
+    env = debian_master
+    master = xmlrpc.client.ServerProxy(env["ROS_MASTER_URI"])
+    code, _msg, _pubs = master.registerSubscriber("/ghost", "/said", "std_msgs/String", "http://127.0.0.1:9/")
+    assert code == 1
+    pub = ["topic", "pub", "/said", "std_msgs/String", "data: hi", "-r", "10", "-n", "2"]
+    began = time.monotonic()
+    waited = rostool([*pub, "--match-wait", "1"], env)
+    assert waited.returncode == 0, waited.stderr
+    assert time.monotonic() - began >= 1.0
+    assert waited.stderr.splitlines() == [
+        "rostool: warning: not every subscriber had matched within 1 s, publishing anyway: /said (/ghost) "
+        "(--match-wait S waits longer, 0 not at all)"
+    ]
+    at_once = rostool([*pub, "--match-wait", "0"], env)
+    assert at_once.returncode == 0 and at_once.stderr == "", at_once.stderr
