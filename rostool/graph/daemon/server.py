@@ -53,6 +53,7 @@ class Daemon:
         self.build = build_id()
         self.started = time.monotonic()
         self.last_request = self.started
+        self.quiet_for = 0.0  # how long it had been idle when the latest request came (status says it)
         self.stopping = threading.Event()
         self.graph_lock = threading.Lock()
         self.clients = threading.BoundedSemaphore(MAX_CLIENTS)
@@ -150,7 +151,7 @@ class Daemon:
             "build": self.build, "log": str(self.place.log), "graph": size, "key": dict(self.place.fields),
             "relays": sorted(relay.topic for relay in list(self.relays)), "memory": memory(),
             "queries": self.queries, "idle_exit": self.idle, "auto_started": self.auto,
-            "idle": round(time.monotonic() - self.last_request, 3),
+            "idle": round(self.quiet_for, 3),
         }  # fmt: skip
 
     # --- the socket ------------------------------------------------------------------------------
@@ -172,7 +173,8 @@ class Daemon:
                     if self.stopping.is_set():
                         break
                     raise
-                self.last_request = time.monotonic()
+                now = time.monotonic()
+                self.quiet_for, self.last_request = now - self.last_request, now
                 if not self.clients.acquire(blocking=False):
                     connection.close()
                     continue
