@@ -129,9 +129,11 @@ match_wait_option = click.option(
 )  # fmt: skip
 
 
-def warn_line(text: str) -> None:
-    """One `rostool: warning: ...` line on stderr: the command goes on."""
-    click.echo(f"rostool: warning: {text}", err=True)
+def warner(quiet: bool) -> Callable[[str], None]:
+    """`rostool: warning: ...` lines on stderr, or nothing with -q."""
+    if quiet:
+        return lambda text: None
+    return lambda text: click.echo(f"rostool: warning: {text}", err=True)
 
 
 interfaces_option = click.option(

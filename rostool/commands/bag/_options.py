@@ -42,13 +42,6 @@ def topic_list(values: Sequence[str]) -> list[str]:
     return [name for value in values for name in value.replace(",", " ").split()]
 
 
-def warner(quiet: bool) -> Callable[[str], None]:
-    """`rostool: warning: ...` lines on stderr, or nothing with -q."""
-    if quiet:
-        return lambda text: None
-    return lambda text: click.echo(f"rostool: warning: {text}", err=True)
-
-
 max_rate_option = click.option(
     "--max-rate", multiple=True, metavar="TOPIC:HZ",
     help="Keep at most HZ messages a second of TOPIC (1/HZ since the last one kept; repeatable).",

@@ -12,7 +12,7 @@ from typing import Literal
 import click
 
 from rostool.bag.play import PlayOptions, PlayResult
-from rostool.commands.bag._options import warner
+from rostool.commands._common import warner
 from rostool.errors import RostoolError
 
 

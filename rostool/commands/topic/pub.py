@@ -15,7 +15,7 @@ from rostool.commands._common import (
     match_wait_option,
     open_live_graph,
     ros_version,
-    warn_line,
+    warner,
 )
 from rostool.commands._qos import topic_qos_options
 from rostool.errors import RostoolError
@@ -96,7 +96,7 @@ def pub(
     try:
         graph.use_qos(qos)
         say: Callable[[str], None] = (lambda _t: None) if quiet else click.echo
-        warn = (lambda _t: None) if quiet else warn_line
+        warn = warner(quiet)
         if graph.style == "ros2" and not latch and not file:
             total = 1 if once else times if times is not None else count
             wait_matching = _ros2_wait(wait_matching, max_wait, once or times is not None)
