@@ -23,6 +23,7 @@ from rostool.graph.base import Graph, ServedService
 
 PLAYER_NODE = "/rosbag2_player"  # rosbag2's player node: its services are under it
 _TYPES = "rosbag2_interfaces/srv/"
+MAKE_SECONDS = 10.0  # the most a verb's end waits for its services still being made (ServedLater)
 
 
 def _no_value(_request: Any) -> None:
@@ -107,6 +108,25 @@ class Served:
             with contextlib.suppress(Exception):
                 service.close()
         self.services.clear()
+
+
+class ServedLater:
+    """Services made on a thread of their own (`make()`), so what the verb does first is not held up by
+    them: `bag record` subscribes at once while its recorder services (0.6 s of type building on the DDS
+    backend) are made beside it. `close` waits for them to be made, then closes them."""
+
+    def __init__(self, make: Callable[[], Served]) -> None:
+        self._served: Served | None = None
+        self._thread = threading.Thread(target=self._make, args=(make,), name="services", daemon=True)
+        self._thread.start()
+
+    def _make(self, make: Callable[[], Served]) -> None:
+        self._served = make()
+
+    def close(self) -> None:
+        self._thread.join(MAKE_SECONDS)
+        if self._served is not None:
+            self._served.close()
 
 
 def serve(

@@ -52,7 +52,7 @@ def run_record(ctx: click.Context, request: RecordRequest) -> None:
 
 
 def _record(ctx: click.Context, request: RecordRequest, stop: threading.Event) -> None:
-    from rostool.bag.player_services import Served, serve_recorder
+    from rostool.bag.player_services import Served, ServedLater, serve_recorder
     from rostool.bag.record import Recorder
     from rostool.commands._common import live_graph
     from rostool.commands.bag._record_console import PlainProgress, RecordDashboard, pause_controls
@@ -104,14 +104,14 @@ def _record(ctx: click.Context, request: RecordRequest, stop: threading.Event) -
             return done
 
         take = snapshot if options.snapshot else None
-        served = Served()
-        if ros2_form and graph.encoding == "cdr":  # rosbag2's recorder services
-            served = serve_recorder(
+        served: Served | ServedLater = Served()
+        if ros2_form and graph.encoding == "cdr":  # rosbag2's recorder services, made beside the subscribing
+            served = ServedLater(lambda: serve_recorder(
                 graph, graph.resolve(request.node_name), lambda: recorder.paused, toggle,
                 (lambda: snapshot().wait(SNAPSHOT_WAIT)) if take is not None else None,
                 lambda: recorder.split().wait(SNAPSHOT_WAIT),
                 warn if take is not None else lambda _text: None,  # said only where asked for (snapshots)
-            )  # fmt: skip
+            ))  # fmt: skip
         with contextlib.closing(served), pause_controls(toggle, request.keyboard, take) as keys:
             if not request.quiet and (keys or recorder.paused):
                 click.echo(_pause_hint(keys, recorder.paused, ros2_form), err=True)

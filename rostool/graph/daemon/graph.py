@@ -1,8 +1,6 @@
 """`DaemonGraph`: the Graph protocol with its read-only queries answered by the user's graph daemon, its
-subscriptions relayed by it (echo, hz, bw, plot), and everything else (pub, call, record, goals,
-parameters) by a direct backend made on first need. `bag record` stays direct: its source follows
-discovery itself (-a, --regex), holds its --duration clock on its readers' matched counts and reads the
-publishers' QoS for the bag's metadata, none of which a stream of messages carries.
+subscriptions relayed by it (echo, hz, bw, plot, and `bag record`'s: record_relay.py), and everything
+else (pub, call, goals, parameters) by a direct backend made on first need.
 
 When no daemon answers, the query is answered directly (complete, as without a daemon) and a daemon is
 started detached for the next calls; a daemon that takes the connection but does not answer in time is
@@ -40,7 +38,7 @@ if TYPE_CHECKING:
     from rostool.graph.daemon.lent_types import LentTypes
     from rostool.graph.daemon.relay_client import RelayedSubscription
     from rostool.graph.qos import QosRequest
-    from rostool.graph.recording import Encoding
+    from rostool.graph.recording import Encoding, RecordSource
 
 
 # how long a call waits for a daemon that is starting: it serves once its interpreter is up and its graph
@@ -119,10 +117,16 @@ class DaemonGraph:
     def subscribe(self, topic: str, on_message: OnMessage, on_error: OnError | None = None) -> Subscription:
         """A subscription relayed by the daemon, whose reader already matched the topic's publishers (the
         first message comes without this process joining the graph); directly when no daemon serves."""
-        report = on_error or self._warn
+        return self.relayed_subscription(topic, on_message, on_error or self._warn, self._warn)
+
+    def relayed_subscription(
+        self, topic: str, on_message: OnMessage, on_error: OnError, warn: Callable[[str], None]
+    ) -> Subscription:
+        """`subscribe` with the relay's warnings (a daemon that stopped relaying, messages it dropped) said
+        through `warn`."""
 
         def directly() -> Subscription:
-            return self.direct.subscribe(topic, on_message, report)
+            return self.direct.subscribe(topic, on_message, on_error)
 
         def relayed() -> Subscription:
             from rostool.graph.daemon.relay_client import RelayedSubscription
@@ -135,11 +139,22 @@ class DaemonGraph:
                 raise
             except (NotRelayed, RostoolError):  # the direct subscription says what is wrong, if anything
                 return directly()
-            relay = RelayedSubscription(sock, resolved, self.types, on_message, report, self._warn, directly)
+            relay = RelayedSubscription(sock, resolved, self.types, on_message, on_error, warn, directly)
             self._relays.append(relay)
             return relay
 
         return self._served(relayed, directly)  # type: ignore[no-any-return]
+
+    def record_source(self, warn: Callable[[str], None], include_hidden: bool = False) -> RecordSource:
+        """`bag record` from the first instant: while the daemon serves, the topics it shows are recorded
+        through relays, whose readers join a graph that already knows the publishers (measured: the first
+        message 0.1 s after subscribing, instead of a second or more for a participant of this process to be
+        discovered); the direct source otherwise (no daemon yet: it is started for the next call)."""
+        if self._bypass or self._daemon_distro() is None:
+            return self.direct.record_source(warn, include_hidden)  # type: ignore[attr-defined,no-any-return]
+        from rostool.graph.daemon.record_relay import RelayedRecordSource
+
+        return RelayedRecordSource(self, warn, include_hidden)
 
     def close(self) -> None:
         for relay in self._relays:

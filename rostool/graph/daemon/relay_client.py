@@ -39,6 +39,9 @@ class RelayedSubscription:
         self._direct = direct
         self._inner: Subscription | None = None
         self._closed = threading.Event()
+        # set when the daemon's reader matched the publishers it knew (or knew none), on the first message,
+        # or when this process subscribes itself: `bag record`'s wait before its --duration clock
+        self.ready = threading.Event()
         self._lock = threading.Lock()
         self._thread = threading.Thread(target=self._read, name=f"relayed {topic}", daemon=True)
         self._thread.start()
@@ -66,6 +69,10 @@ class RelayedSubscription:
                 kind, stamp, payload = wire.receive_frame(stream)
                 if kind == wire.MESSAGE:
                     deliver(Received(topic, payload, stamp, type_name, decoder))
+                    if not self.ready.is_set():
+                        self.ready.set()
+                elif kind == wire.READY:
+                    self.ready.set()
                 elif kind == wire.TYPE:
                     type_name = self._learn(payload)
                     decoder = _decoder(store, type_name)
@@ -85,17 +92,26 @@ class RelayedSubscription:
 
     def _learn(self, payload: bytes) -> str:
         """The type the daemon reads, made known to this process's store from the daemon's definition
-        when this process lacks it (a type the daemon learned from its publisher)."""
+        when this process lacks it (a type the daemon learned from its publisher): its .msg text, or for a
+        type rosbags cannot write as one (a service's event type) its field definitions."""
         described = json.loads(payload)
         name, text = str(described["name"]), str(described.get("definition") or "")
-        if text and not self._types.in_store(name):
-            from rosbags.typesys import get_types_from_msg
-
+        fielddefs = described.get("fielddefs")
+        if not self._types.in_store(name):
             with contextlib.suppress(Exception):  # unparsable: this process's own sources may know it
-                self._types.register(get_types_from_msg(text, name))
+                if fielddefs:
+                    self._types.register(_fielddefs_from_json(fielddefs))
+                elif text:
+                    from rosbags.typesys import get_types_from_msg
+
+                    self._types.register(get_types_from_msg(text, name))
+        if not self._types.in_store(name):
+            with contextlib.suppress(Exception):  # a broken source file: the decoder names the type
+                self._types.knows(name)  # from this process's sources (an event type built from them)
         return name
 
     def _go_direct(self) -> None:
+        self.ready.set()  # the direct subscription's own start is not waited for
         with self._lock:
             if self._closed.is_set():
                 return
@@ -107,3 +123,22 @@ def _decoder(store: Any, type_name: str) -> Callable[[bytes], Any]:
         return store.deserialize_cdr(payload, type_name)
 
     return decode
+
+
+def _fielddefs_from_json(found: dict[str, Any]) -> dict[str, Any]:
+    """rosbags' `{name: (consts, fields)}` from relay_server's JSON of it (lists back to tuples, numbers
+    back to Nodetype: rosbags compares definitions as tuples)."""
+    from rosbags.interfaces import Nodetype
+
+    def desc(value: Any) -> Any:
+        kind, args = Nodetype(value[0]), value[1]
+        if kind == Nodetype.NAME:
+            return (kind, str(args))
+        if kind == Nodetype.BASE:
+            return (kind, (str(args[0]), int(args[1])))
+        return (kind, (desc(args[0]), int(args[1])))
+
+    return {
+        name: ([tuple(const) for const in consts], [(str(field), desc(value)) for field, value in fields])
+        for name, (consts, fields) in found.items()
+    }

@@ -15,6 +15,7 @@ import socket
 import threading
 import time
 from collections import deque
+from collections.abc import Mapping
 from dataclasses import fields
 from typing import Any
 
@@ -27,6 +28,10 @@ from rostool.graph.ros2_base.relaying import subscribe_for
 QUEUE_BYTES = 64 * 1024 * 1024  # a client's messages waiting to be sent
 BATCH_BYTES = 1024 * 1024  # frames sent in one write, at most about this much
 COALESCE_SECONDS = 0.001
+READY_SECONDS = 3.0  # the most a relay waits for its reader to match before it says READY all the same
+# the daemon's graph is settled: a topic whose publishers it does not show a moment after the reader was
+# asked for is unpublished now (the subscription looks at discovery every 10 ms)
+UNPUBLISHED_SECONDS = 0.1
 log = logging.getLogger("rostool.daemon")
 Frame = tuple[bytes, int, bytes]
 
@@ -66,6 +71,7 @@ class Relay:
         sender = threading.Thread(target=self._send, name=f"relay {self.topic}", daemon=True)
         sender.start()
         try:
+            self._say_ready()
             self.connection.settimeout(None)
             while not self._done.is_set():
                 try:
@@ -78,6 +84,21 @@ class Relay:
             sender.join(5.0)
             if self._subscription is not None:
                 self._subscription.close()
+
+    def _say_ready(self) -> None:
+        """One READY frame once the reader has matched the publishers the daemon knew when it was made
+        (its matched count), or at once when it knows none: a recording's --duration counts from then."""
+        subscription, began = self._subscription, time.monotonic()
+        wait_matched = getattr(subscription, "wait_matched", None)
+        matched = wait_matched is None  # a subscription that cannot tell: ready now
+        while not matched and not self._done.is_set() and time.monotonic() - began < READY_SECONDS:
+            assert wait_matched is not None
+            matched = bool(wait_matched(0.02))
+            if not getattr(subscription, "publishers_known", True) and (
+                time.monotonic() - began >= UNPUBLISHED_SECONDS
+            ):
+                break
+        self._queue((wire.READY, time.time_ns(), b"1" if matched else b"0"))
 
     def stop(self) -> None:
         self._done.set()
@@ -95,12 +116,17 @@ class Relay:
 
     def _described(self, type_name: str) -> bytes:
         """The type's name and .msg definition (with its nested types): a client that lacks it decodes with
-        the daemon's."""
+        the daemon's. rosbags writes .msg text for `pkg/msg/` names only, so a type it cannot write (a
+        service's event type, `pkg/srv/T_Event`, which the daemon built from sources or learned from the
+        service's node) goes as rosbags' field definitions of it and of every type it nests."""
+        store = self.graph.types.store
+        described: dict[str, Any] = {"name": type_name, "definition": ""}
         try:
-            text = self.graph.types.store.generate_msgdef(type_name, ros_version=2)[0]
-        except Exception:  # a definition rosbags cannot write out: the client's own types decide
-            text = ""
-        return json.dumps({"name": type_name, "definition": text}).encode()
+            described["definition"] = store.generate_msgdef(type_name, ros_version=2)[0]
+        except Exception:
+            with contextlib.suppress(Exception):  # neither: the client's own types decide
+                described["fielddefs"] = _closure(store.fielddefs, type_name)
+        return json.dumps(described).encode()
 
     def _warn(self, text: str) -> None:
         self._queue((wire.WARNING, time.time_ns(), text.encode()))
@@ -160,3 +186,22 @@ class Relay:
             log.info("relay of %s ended: %s", self.topic, err)
         finally:
             self.stop()
+
+
+def _closure(fielddefs: Mapping[str, Any], type_name: str) -> dict[str, Any]:
+    """`type_name`'s field definitions and those of every type it nests (in JSON: tuples as lists, each
+    Nodetype as its number; relay_client.py turns them back)."""
+    from rosbags.interfaces import Nodetype
+
+    found: dict[str, Any] = {}
+    pending = [type_name]
+    while pending:
+        name = pending.pop()
+        if name in found:
+            continue
+        found[name] = fielddefs[name]
+        for _field, (kind, args) in fielddefs[name][1]:
+            element_kind, element = args[0] if kind in (Nodetype.ARRAY, Nodetype.SEQUENCE) else (kind, args)
+            if element_kind == Nodetype.NAME:
+                pending.append(element)
+    return found

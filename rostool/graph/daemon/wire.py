@@ -8,9 +8,12 @@ the daemon is of another build than the client (it then stops, to be replaced).
 A relay: {"op": "subscribe", "build": B, "topic": T, "qos": {...}} (the verb's --qos-* request) is answered
 {"ok": ...} (or as a query is refused, or {"direct": why} when the daemon cannot relay it), then the daemon
 streams binary frames until the client closes: a header (payload length, kind, receive time in ns) and the
-payload: MESSAGE (CDR bytes), TYPE (JSON: the type's name and .msg definition, before its first message),
+payload: MESSAGE (CDR bytes), TYPE (JSON: the type's name and .msg definition, or rosbags' field definitions
+where rosbags writes no .msg text (a service's event type), before its first message),
 WARNING and ERROR (one line of text), DIRECT (one line: the daemon cannot serve this subscription, which
-the client then makes itself).
+the client then makes itself), READY (once: b"1" when the daemon's reader has matched every publisher it
+knew when it was made, b"0" when it knew none or one never matched in time: `bag record` starts its
+--duration clock on it).
 """
 
 from __future__ import annotations
@@ -24,7 +27,7 @@ MAX_MESSAGE = 32 * 1024 * 1024
 _HEADER = struct.Struct(">I")
 MAX_SAMPLE = 512 * 1024 * 1024  # a relayed message's bytes (a DDS sample is at most 4 GiB)
 _FRAME = struct.Struct(">IcQ")
-MESSAGE, TYPE, WARNING, ERROR, DIRECT = b"m", b"t", b"w", b"e", b"d"
+MESSAGE, TYPE, WARNING, ERROR, DIRECT, READY = b"m", b"t", b"w", b"e", b"d", b"r"
 _SMALL = 64 * 1024  # payloads up to this size go out in one write with their header
 
 
