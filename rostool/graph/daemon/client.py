@@ -68,7 +68,7 @@ class DaemonClient:
         return self._build
 
     # --- asking ----------------------------------------------------------------------------------
-    def request(self, message: dict[str, Any], timeout: float = ANSWER_SECONDS) -> Any:
+    def request(self, message: dict[str, Any], timeout: float | None = ANSWER_SECONDS) -> Any:
         """The daemon's answer's value; RostoolError for the backend's own one-line errors."""
         sock = self._connect()
         with sock:
@@ -87,7 +87,7 @@ class DaemonClient:
         return sock
 
     @staticmethod
-    def _asked(sock: socket.socket, message: dict[str, Any], timeout: float = ANSWER_SECONDS) -> Any:
+    def _asked(sock: socket.socket, message: dict[str, Any], timeout: float | None = ANSWER_SECONDS) -> Any:
         sock.settimeout(timeout)
         try:
             wire.send(sock, message)

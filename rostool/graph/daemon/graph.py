@@ -1,6 +1,7 @@
 """`DaemonGraph`: the Graph protocol with its read-only queries answered by the user's graph daemon, its
-subscriptions relayed by it (echo, hz, bw, plot, and `bag record`'s: record_relay.py), and everything
-else (pub, call, goals, parameters) by a direct backend made on first need.
+subscriptions relayed by it (echo, hz, bw, plot, and `bag record`'s: record_relay.py), its parameters and
+service calls made by it (calls.py: also lifecycle's and logger levels'), and everything else (pub, goals,
+serving) by a direct backend made on first need.
 
 When no daemon answers, the query is answered directly (complete, as without a daemon) and a daemon is
 started detached for the next calls; a daemon that takes the connection but does not answer in time is
@@ -30,11 +31,13 @@ if TYPE_CHECKING:
         NodeInfo,
         OnError,
         OnMessage,
+        Parameters,
         ServiceInfo,
         Subscription,
         TopicEndpoint,
         TopicInfo,
     )
+    from rostool.graph.daemon.calls import DaemonCallHost
     from rostool.graph.daemon.lent_types import LentTypes
     from rostool.graph.daemon.relay_client import RelayedSubscription
     from rostool.graph.qos import QosRequest
@@ -155,6 +158,34 @@ class DaemonGraph:
         from rostool.graph.daemon.record_relay import RelayedRecordSource
 
         return RelayedRecordSource(self, warn, include_hidden)
+
+    # --- calls the daemon makes for this process -------------------------------------------------------
+    def _call_host(self) -> DaemonCallHost | None:
+        """Parameters and service calls through the daemon while it serves (calls.py); None: directly."""
+        distro = None if self._bypass else self._daemon_distro()
+        if distro is None:
+            return None
+        from rostool.graph.daemon.calls import DaemonCallHost
+
+        return DaemonCallHost(self, self._client, distro)
+
+    def parameters(self, node: str | None, timeout: float = 5.0) -> Parameters:
+        host = self._call_host()
+        if host is None or node is None:
+            return self.direct.parameters(node, timeout)
+        from rostool.graph.ros2_base.params import NodeParameters
+
+        return NodeParameters(host, node, timeout)  # type: ignore[arg-type]
+
+    def service_call(
+        self, name: str, values: tuple[str, ...], wait: bool = False, timeout: float | None = None
+    ) -> tuple[Any, Any]:
+        host = self._call_host()
+        if host is None:
+            return self.direct.service_call(name, values, wait, timeout)
+        from rostool.graph.ros2_base.calls import call_service
+
+        return call_service(host, name, values, wait, timeout)  # type: ignore[arg-type]
 
     def close(self) -> None:
         for relay in self._relays:

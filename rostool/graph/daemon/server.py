@@ -1,6 +1,7 @@
 """The daemon process: one long-lived graph of the selected backend, its read-only queries served on a
 Unix-domain socket (0600, in the user's 0700 directory); no TCP or UDP port of its own. It also relays
-subscriptions (relay_server.py): a verb's reader in this graph, its messages streamed to the verb.
+subscriptions (relay_server.py): a verb's reader in this graph, its messages streamed to the verb; and
+makes service calls for verbs (call_server.py: parameters, `service call`, lifecycle, logger levels).
 
 Life: take the key's lock (held until exit: a second daemon of the same key waits or gives up), open the
 graph and let discovery settle, then bind the socket; clients meanwhile find the lock held and answer
@@ -26,6 +27,7 @@ from typing import IO, Any
 
 from rostool.errors import RostoolError
 from rostool.graph.daemon import wire
+from rostool.graph.daemon.call_server import Calls
 from rostool.graph.daemon.memory import memory
 from rostool.graph.daemon.place import DaemonPlace, build_id, daemon_place
 from rostool.graph.daemon.queries import SERVED
@@ -39,6 +41,7 @@ IDLE_ENV = "ROSTOOL_DAEMON_IDLE"
 LOCK_WAIT_SECONDS = 10.0  # a replaced daemon's time to go
 CLIENT_SECONDS = 5.0  # how long one client may take to send its request or read the answer
 MAX_CLIENTS = 256
+CALL_OPS = ("call_open", "call_wait", "call")  # call_server.py's
 MAX_RELAYS = 128  # subscriptions relayed at once; past it a client subscribes itself
 NODE_NAME = "_rostool_daemon"  # hidden (a leading `_`), as ros2cli's own daemon node
 log = logging.getLogger("rostool.daemon")
@@ -59,6 +62,7 @@ class Daemon:
         self.clients = threading.BoundedSemaphore(MAX_CLIENTS)
         self.backend = ""
         self.graph: Any = None
+        self.calls: Calls | None = None
         self.relays: set[Relay] = set()
         self.relays_lock = threading.Lock()
         self.queries = 0  # graph queries answered (`daemon status` shows whether calls reach this daemon)
@@ -70,6 +74,7 @@ class Daemon:
         self.backend, self.graph = open_ros2(None if self.requested == "auto" else self.requested, NODE_NAME)
         self.graph.require_peers = False  # an empty graph is an empty answer, as ros2's daemon gives
         self.graph.wait_for_discovery()
+        self.calls = Calls(self.graph, self.graph_lock)
         log.info("graph of %s (%s backend) ready", dict(self.place.fields)["domain"], self.backend)
 
     def answer(self, request: dict[str, Any]) -> dict[str, Any]:
@@ -79,11 +84,14 @@ class Daemon:
         if op == "stop":
             self.stopping.set()
             return {"ok": True}
-        if op != "query":
+        if op not in ("query", *CALL_OPS):
             return {"error": f"graph daemon: unknown request {op!r}"}
         other = self._other_build(request)
         if other is not None:
             return other
+        if op in CALL_OPS and self.calls is not None:  # a call made for the verb: not under the lock
+            self.queries += 1
+            return self.calls.answer(request)
         method, args = request.get("method"), request.get("args", [])
         if method == "type_distro":  # the distro the client decodes relayed messages with
             return {"ok": self.graph.types.distro}
@@ -190,6 +198,8 @@ class Daemon:
         while not self.stopping.wait(0.25):
             with self.graph_lock:
                 self.graph.wait_for_newcomers(0.0)
+            if self.calls is not None:
+                self.calls.sweep()
 
     def _client(self, connection: socket.socket) -> None:
         try:
@@ -214,6 +224,8 @@ class Daemon:
             relays = list(self.relays)
         for relay in relays:
             relay.stop()
+        if self.calls is not None:
+            self.calls.close()
         if self.graph is not None:
             with contextlib.suppress(Exception):
                 self.graph.close()
