@@ -129,6 +129,7 @@ def main() -> None:
             "/fibonacci",
             "--step",
             "0.01",
+            "--params",
         ],
     )
     peers = [talker, listener]
@@ -274,9 +275,11 @@ def bench_phases(tools: list[Tool], runs: int) -> None:
 
 
 def bench_calls(tools: list[Tool], runs: int, server: RclpyPeer) -> None:
-    """service call and action send_goal of the real node's server: wall time, and whether it answered."""
+    """param get, service call and action send_goal of the real node's servers: wall time, and whether it
+    answered."""
     goal = ["action", "send_goal", "/fibonacci", "test_msgs/action/Fibonacci", "{order: 3}"]
     verbs = {
+        "param get": (["param", "get", "/listener", "count"], "Integer value is: 3"),
         "service call": (["service", "call", "/set_flag", "std_srvs/srv/SetBool", "{data: true}"], "success"),
         "action send_goal": (goal, "SUCCEEDED"),
     }

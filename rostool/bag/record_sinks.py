@@ -172,7 +172,7 @@ class Ros2Sink:
         self._shared: dict[tuple[str | None, str | None, str | None, bool], tuple[Any, Any]] = {}
         self.problems: dict[str, str] = {}
         self._bytes = 0
-        self._chunk_started = time.monotonic()
+        self._chunk_started: float | None = None  # when the pending mcap chunk got its first message
         self.metadata: dict[str, Any] = {}  # the part's rosbag2 metadata, read when closed
         self.compressed = compression is not None
         self.configured = storage_config is not None
@@ -195,6 +195,8 @@ class Ros2Sink:
             return False
         self.writer.write(conn, time_ns, data)
         self._bytes += len(data)
+        if self._chunk_started is None:
+            self._chunk_started = time.monotonic()
         return True
 
     def _add(self, header: Mapping[str, str]) -> tuple[Any, Callable[[bytes], Any]] | None:
@@ -244,10 +246,13 @@ class Ros2Sink:
         if self.fmt.kind == "mcap" and self.configured:
             storage.flush()  # chunks as the config file sizes them
         elif self.fmt.kind == "mcap":
-            # Close the pending chunk now and then so a killed recorder leaves a reindexable file.
-            if storage.chunk.bio.tell() and time.monotonic() - self._chunk_started >= 1.0:
+            # Close the pending chunk once its oldest message is 1 s old, so a killed recorder loses at
+            # most that second (counted from the last close instead, a chunk begun late in a quiet
+            # second was held until the next one).
+            started = self._chunk_started
+            if storage.chunk.bio.tell() and started is not None and time.monotonic() - started >= 1.0:
                 storage.close_chunk()
-                self._chunk_started = time.monotonic()
+                self._chunk_started = None
             storage.bio.flush()
         else:
             storage.conn.commit()
