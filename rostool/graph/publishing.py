@@ -57,7 +57,7 @@ def publish_loop(
         publisher.publish(messages[0])
         if once:
             say(f"publishing and latching message for {ONCE_LATCH_SECONDS:.1f} seconds")
-            _linger(graph, publisher, ONCE_LATCH_SECONDS)
+            _linger(graph, publisher, ONCE_LATCH_SECONDS, asked=match_wait > 0)
             return
         say("publishing and latching message. Press ctrl-C to terminate")
         while True:
@@ -69,13 +69,15 @@ def publish_loop(
     say(f"publishing {type_name} on {topic}" + (f" at {rate:g} Hz" if rate else ""))
     _paced(period, total, lambda sent: publisher.publish(messages[sent % len(messages)]))
     if latched or once:
-        _linger(graph, publisher, min(ONCE_LATCH_SECONDS, 1.0))
+        _linger(graph, publisher, min(ONCE_LATCH_SECONDS, 1.0), asked=match_wait > 0)
 
 
-def _linger(graph: Graph, publisher: Any, seconds: float) -> None:
-    """Stay up until every subscriber the graph knows has connected (at most `seconds`)."""
+def _linger(graph: Graph, publisher: Any, seconds: float, asked: bool = False) -> None:
+    """Stay up `seconds`, until every subscriber the graph knows has connected at least; `asked`: they
+    were waited for before publishing (the graph is not asked twice)."""
     deadline = time.monotonic() + seconds
-    _wait_for_known_subscribers(graph, publisher, seconds)
+    if not asked:
+        _wait_for_known_subscribers(graph, publisher, seconds)
     time.sleep(max(0.0, deadline - time.monotonic()))
 
 
