@@ -4,6 +4,7 @@ every ROS 2 test. It takes roles from its arguments and reports what it sees as 
     {"event": "ready"}                                   after every entity is created
     {"event": "heard", "topic": T, "data": ...}          --listen: each message (std_msgs/String data)
     {"event": "service", "data": true}                   --service: each std_srvs/SetBool request
+                                                         (--setbool-introspect too: its own client's)
     (no events)                                          --echo-service: test_msgs/BasicTypes echo
     {"event": "goal", "order": 5} / "cancel" / "done"    --action: test_msgs/Fibonacci server
     {"event": "param", "name": N, "value": V}            --params: each accepted parameter change
@@ -19,6 +20,9 @@ every ROS 2 test. It takes roles from its arguments and reports what it sees as 
                                                          --hello TOPIC: 'Hello World: N' at 1 Hz
                                                          --cmd-vel TOPIC: TwistStamped, stamp now, linear.x 1
                                                          (--period S: every S seconds instead)
+    (no events)                                          --extra-nodes N: N more nodes after this one,
+                                                         NAME_1..NAME_N, each publishing std_msgs/String
+                                                         on /NAME_i/t0.. (--extra-topics K of them)
 
 Not a pytest module: tests start it through tests/ros2_peers.py.
 """
@@ -181,6 +185,8 @@ class Peer(Node):
 
             self.cmd_vel = self.create_publisher(TwistStamped, args.cmd_vel, 10)
             self.create_timer(args.period, self.tick_cmd_vel)
+        if args.setbool_introspect:
+            self.introspect_set_bool(args.setbool_introspect)
 
     def tick_hello(self) -> None:
         from std_msgs.msg import String
@@ -310,6 +316,31 @@ class Peer(Node):
         result.sequence = sequence
         return result
 
+    def introspect_set_bool(self, service: str) -> None:
+        """--setbool-introspect: a std_srvs/SetBool server and a client calling it every 0.5 s (data
+        True, False, True, ...), both with introspection CONTENTS, as a user's node would configure it."""
+        from rclpy.qos import qos_profile_system_default
+        from rclpy.service_introspection import ServiceIntrospectionState
+        from std_srvs.srv import SetBool
+
+        contents = (self.get_clock(), qos_profile_system_default, ServiceIntrospectionState.CONTENTS)
+        server = self.create_service(SetBool, service, self.on_set_bool)
+        server.configure_introspection(*contents)
+        self.set_bool_client = self.create_client(SetBool, service)
+        self.set_bool_client.configure_introspection(*contents)
+        self.set_bool_future: object = None
+        self.set_bool_calls = 0
+        self.create_timer(0.5, self.call_set_bool)
+
+    def call_set_bool(self) -> None:
+        from std_srvs.srv import SetBool
+
+        done = self.set_bool_future is None or self.set_bool_future.done()  # type: ignore[attr-defined]
+        if self.set_bool_client.service_is_ready() and done:
+            self.set_bool_calls += 1
+            request = SetBool.Request(data=self.set_bool_calls % 2 == 1)
+            self.set_bool_future = self.set_bool_client.call_async(request)
+
     def report_graph(self) -> None:
         topics = dict(self.get_topic_names_and_types())
         publishers = {
@@ -328,6 +359,20 @@ class Peer(Node):
         }
         nodes = sorted(ns.rstrip("/") + "/" + n for n, ns in self.get_node_names_and_namespaces())
         emit("graph", nodes=nodes, topics=topics, publishers=publishers, subscribers=subscribers)
+
+
+def extra_nodes(args: argparse.Namespace) -> list[Node]:
+    """--extra-nodes: more nodes of this process's one context, made one after the other as a launch
+    file's composed nodes are (the last one's publishers are the last entities the participant makes)."""
+    from std_msgs.msg import String
+
+    made = []
+    for i in range(1, args.extra_nodes + 1):
+        extra = Node(f"{args.name}_{i}", namespace=args.namespace)
+        for t in range(args.extra_topics):
+            extra.create_publisher(String, f"/{args.name}_{i}/t{t}", 10)
+        made.append(extra)
+    return made
 
 
 def main() -> None:
@@ -376,12 +421,19 @@ def main() -> None:
     parser.add_argument("--cmd-vel", help="publish geometry_msgs/TwistStamped (stamp now, x 1) at 1 Hz")
     parser.add_argument("--period", type=float, default=1.0, help="seconds between --repeat, --hello and "
                         "--cmd-vel messages (ros2cli's fixtures: 1)")  # fmt: skip
+    parser.add_argument("--setbool-introspect", metavar="SERVICE", help="serve std_srvs/srv/SetBool here "
+                        "with introspection contents on, and a client calling it every 0.5 s")  # fmt: skip
+    parser.add_argument("--extra-nodes", type=int, default=0, help="N more nodes in this process, created "
+                        "after this one: NAME_1..NAME_N, each publishing on /NAME_i/t0..")  # fmt: skip
+    parser.add_argument("--extra-topics", type=int, default=3, help="with --extra-nodes: publishers per node")
     args = parser.parse_args()
     rclpy.init()
     node = Peer(args)
     # the counter runs as `ros2 topic hz` does (one thread); the servers need several
     executor = SingleThreadedExecutor() if args.raw_count else MultiThreadedExecutor(num_threads=4)
     executor.add_node(node)
+    for extra in extra_nodes(args):
+        executor.add_node(extra)
     emit("ready", node=node.get_fully_qualified_name())
     with contextlib.suppress(KeyboardInterrupt, ExternalShutdownException):
         executor.spin()

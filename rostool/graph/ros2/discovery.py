@@ -28,6 +28,19 @@ ENDPOINTS_GRACE = 4.0  # seconds a participant may take to describe itself (Fast
 # participant has shown both kinds, the rest of a burst follows within milliseconds (measured: at most 4 ms
 # after, in 28 cold listings of 10 Fast DDS peers at load 11-14), so a short quiet spell ends the wait.
 DESCRIBED_QUIET = 0.03
+# ...but not when a participant has more endpoints of one kind than Cyclone asks for at once: an ACKNACK
+# names at most 128 missing samples (its reorder window, Internal/PrimaryReorderMaxSamples' default). An
+# rclpy process of 11 nodes with 4 publishers each has 144 writers (a Jazzy node makes 9 of its own); on
+# the wire: HEARTBEAT 1..144, ACKNACK 1/128, writers 1..128 at once, then ACKNACK 129/16 100 ms later,
+# answered with 10, then ACKNACK 139/6 another 100 ms later (30-100 ms in cold listings): the quiet spell
+# ended between them, and the listing lacked the last node's publishers, the last entities it made. So
+# whenever a participant's ros_discovery_info is known, every GID it names must have come by SEDP (the
+# GIDs are the endpoints' GUIDs); before that sample, a participant that showed a whole window of one kind
+# is waited for (its sample comes 10-50 ms after the burst, see defer_info_reader)
+SEDP_WINDOW = 128
+# ...within a bound: a participant whose endpoints brought nothing new for this long has described all it
+# will (a GID it still names is an endpoint deleted since, or its sample never came)
+NAMED_STALL = 1.0
 POLL_SECONDS = 0.01  # how often a settle looks: the quiet spell is measured at this grain
 # ros_discovery_info's reader is made once the participants seen have described their endpoints, at the
 # latest this long after discovery started (see GraphCache.defer_info_reader)
@@ -217,6 +230,7 @@ class GraphCache:
         self._unnamed: dict[bytes, float] = {}  # participant -> when its ros_discovery_info writer was seen
         self.participants: dict[bytes, bytes] = {}  # GUID -> USER_DATA
         self.first_seen: dict[bytes, float] = {}
+        self.grew: dict[bytes, float] = {}  # participant -> when an endpoint of it last came
         self.endpoints: dict[bytes, Endpoint] = {}
         self.nodes: dict[bytes, list[NodeEntry]] = {}  # participant GUID -> its nodes
         self.started = time.monotonic()
@@ -235,6 +249,7 @@ class GraphCache:
                     changed |= self.participants.pop(key, None) is not None
                     self.nodes.pop(key, None)
                     self.first_seen.pop(key, None)  # a long-lived cache keeps nothing of the gone
+                    self.grew.pop(key, None)
                     self._unnamed.pop(key, None)
                     continue
                 if key not in self.participants:
@@ -258,6 +273,7 @@ class GraphCache:
                         dds.user_data_of(sample.qos), is_writer,
                     )  # fmt: skip
                     changed = True
+                    self.grew[participant] = time.monotonic()
                     if is_writer and sample.topic_name == DISCOVERY_TOPIC and participant != self.own:
                         self._unnamed.setdefault(participant, time.monotonic())
             if self._make_info_reader is not None and self._info_reader_due():
@@ -293,7 +309,9 @@ class GraphCache:
     def _info_reader_due(self) -> bool:
         if time.monotonic() - self.started >= INFO_READER_LATEST:
             return True
-        return any(key != self.own for key in self.participants) and self._described(False)
+        # the participants' first bursts are enough: the peer's ros_discovery_info writer (its first
+        # endpoint) is known by then, and the sample may name endpoints that are still to come
+        return any(key != self.own for key in self.participants) and self._described(False, whole=False)
 
     def _prompt_newcomers(self) -> None:
         """Ask again for the ros_discovery_info of participants whose writer is known but whose sample has
@@ -372,7 +390,10 @@ class GraphCache:
         ros_discovery_info) and discovery has been quiet for a while; True when any other participant was
         found. A participant that is seen is not yet described: Fast DDS answers Cyclone's first
         request for its endpoints only on its next heartbeat (about 1 s later) and sends ros_discovery_info
-        on the heartbeat after that (up to 3 s), so waiting for quiet alone returns an empty graph."""
+        on the heartbeat after that (up to 3 s), so waiting for quiet alone returns an empty graph. A
+        participant with more endpoints than one request of Cyclone's brings them in rounds 30-100 ms
+        apart, longer than a quiet spell: it is waited for until it has all its ros_discovery_info names
+        (see SEDP_WINDOW), past `maximum` too while those rounds still come (NAMED_STALL at most)."""
         if self.long_lived:
             self.poll()
             with self._lock:
@@ -382,7 +403,7 @@ class GraphCache:
             now = time.monotonic()
             elapsed = now - self.started
             remote = any(key != self.own for key in self.participants)
-            if elapsed >= maximum:
+            if elapsed >= maximum and not (elapsed < maximum + NAMED_STALL and self._tail_in_flight(nodes)):
                 return remote
             # each participant's endpoints come in one burst per SEDP writer, so once every participant
             # has shown both kinds a short quiet spell is enough
@@ -412,15 +433,16 @@ class GraphCache:
             time.sleep(0.02)
             self.poll()
 
-    def _described(self, nodes: bool, ignore: bytes | None = None) -> bool:
+    def _described(self, nodes: bool, ignore: bytes | None = None, whole: bool = True) -> bool:
         """Every ROS 2 participant has both a reader and a writer (rmw creates ros_discovery_info's pair
         before any node), so one that shows only one kind yet is still being described; a bare DDS
-        participant is waited for at most ENDPOINTS_GRACE seconds."""
+        participant is waited for at most ENDPOINTS_GRACE seconds. `whole`: also every endpoint beyond
+        the first burst (see `_tail_to_come`)."""
         with self._lock:
-            kinds: dict[bytes, set[bool]] = {}
+            counts: dict[bytes, list[int]] = {}  # participant -> [readers, writers]
             announcers = set()
             for endpoint in self.endpoints.values():
-                kinds.setdefault(endpoint.participant, set()).add(endpoint.is_writer)
+                counts.setdefault(endpoint.participant, [0, 0])[endpoint.is_writer] += 1
                 if endpoint.is_writer and endpoint.dds_topic == DISCOVERY_TOPIC:
                     announcers.add(endpoint.participant)
             now = time.monotonic()
@@ -428,11 +450,36 @@ class GraphCache:
                 age = now - self.first_seen.get(participant, now)
                 if participant in (self.own, ignore) or age > ENDPOINTS_GRACE:
                     continue
-                if len(kinds.get(participant, ())) < 2:
+                count = counts.get(participant, [0, 0])
+                if not all(count):
                     return False
-                if nodes and participant in announcers and participant not in self.nodes:
+                announces = participant in announcers
+                if nodes and announces and participant not in self.nodes:
+                    return False
+                if whole and self._tail_to_come(participant, max(count), announces, now):
                     return False
             return True
+
+    def _tail_in_flight(self, nodes: bool) -> bool:
+        """Every participant has described itself but for the rounds after a first burst: a listing whose
+        time is up gives those (bounded by NAMED_STALL), which come 30-100 ms apart, rather than list a
+        process without its last nodes (a Fast DDS participant's first burst came after 3.1 s in 2 of 12
+        cold listings at load 8)."""
+        return self._described(nodes, whole=False) and not self._described(nodes)
+
+    def _tail_to_come(self, participant: bytes, most: int, announces: bool, now: float) -> bool:
+        """Whether a participant's endpoints beyond Cyclone's first request are still to come (see
+        SEDP_WINDOW): its ros_discovery_info names GIDs that SEDP has not brought yet, or, before that
+        sample, it showed a whole window of one kind. `most`: its endpoints of the more numerous kind."""
+        if now - self.grew.get(participant, now) >= NAMED_STALL:
+            return False
+        entries = self.nodes.get(participant)
+        if entries is None:
+            return announces and most >= SEDP_WINDOW
+        named = {gid for node in entries for gid in (*node.readers, *node.writers)}
+        seen = len(named & self.endpoints.keys())
+        # none seen: GIDs that are not the endpoints' GUIDs (not a DDS rmw as we know it), nothing to wait for
+        return 0 < seen < len(named)
 
     # --- queries ---------------------------------------------------------------------------------
     def remote_endpoints(self) -> list[Endpoint]:
