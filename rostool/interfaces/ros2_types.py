@@ -19,6 +19,7 @@ from rostool.interfaces.typestores import DEFAULT_DISTRO, DISTROS, builtin_store
 # Distros whose nodes put a type hash (REP 2016) into endpoint USER_DATA.
 _TYPE_HASH_DISTROS = ("iron", "jazzy", "kilted")
 _KINDS = {"message": "msg", "service": "srv", "action": "action"}
+EVENT_INFO = "service_msgs/msg/ServiceEventInfo"
 
 
 def distro_from_env(env: Mapping[str, str] = os.environ) -> str:
@@ -33,9 +34,14 @@ class Ros2Types:
 
     def __init__(self, distro: str = DEFAULT_DISTRO, interface_paths: Sequence[str] = ()) -> None:
         self.distro = distro
-        self.store = builtin_store(distro)
+        self.store = self._new_store(distro)
         self.sources = SourceDefinitions(interface_paths)
         self._load_lock = threading.RLock()
+
+    @staticmethod
+    def _new_store(distro: str) -> Any:
+        """The distro's store."""
+        return builtin_store(distro)
 
     def store_name(self, name: str) -> str:
         """`pkg/Type` or `pkg/msg/Type` -> the store's `pkg/msg/Type`; a clear error when unknown."""
@@ -60,7 +66,8 @@ class Ros2Types:
     def _service_event(self, event: str) -> bool:
         """`pkg/srv/T_Event` (service introspection's `<service>/_service_event` topic), built as rosidl
         does from the service's request and response."""
-        service, info = event.removesuffix("_Event"), "service_msgs/msg/ServiceEventInfo"
+        service, info = event.removesuffix("_Event"), EVENT_INFO
+        _as_rosidl_builds(self.store, info)  # before any event type nests it (here, or learned from a node)
         parts = [f"{service}_Request", f"{service}_Response"]
         if not (self.in_store(info) and all(self.knows(part) for part in parts)):
             return False
@@ -137,6 +144,34 @@ class Ros2Types:
 
     def deserialize(self, raw: bytes | memoryview, store_name: str) -> Any:
         return self.store.deserialize_cdr(bytes(raw), store_name)
+
+
+def _as_rosidl_builds(store: Any, name: str) -> None:
+    """`name`'s `char` fields as `uint8`, as rosidl builds them (a .msg `char` is an IDL `uint8`).
+
+    rosbags keeps .msg `char` as a type of its own and hashes it as one (REP 2016's FIELD_TYPE_CHAR), so its
+    ServiceEventInfo (`char[16] client_gid`) hashes to RIHS01_83f84988..., while every Iron+ node announces
+    and describes `uint8[16] client_gid` (RIHS01_41bcbbe0..., share/service_msgs/msg/ServiceEventInfo.json).
+    Every `pkg/srv/T_Event` nests it: with rosbags' version no event type a node describes passed the
+    hash check (type_description.verified), so `service echo` of a type rostool has no source for failed.
+    The bytes are the same (one octet each), so decoding is unchanged. Done when an event type is first
+    asked for (every way to learn one asks `knows` first), so `interface show` of the message itself still
+    prints its .msg's `char[16]`."""
+    found = store.fielddefs.get(name)
+    if found is None:  # a distro before Iron: no service introspection
+        return
+    consts, fields = found
+    store.fielddefs[name] = (consts, [(field, _char_as_uint8(desc)) for field, desc in fields])
+    store.cache.pop(name, None)
+
+
+def _char_as_uint8(desc: Any) -> Any:
+    kind, args = desc
+    if kind == Nodetype.BASE and args[0] == "char":
+        return (kind, ("uint8", args[1]))
+    if kind in (Nodetype.ARRAY, Nodetype.SEQUENCE):
+        return (kind, (_char_as_uint8(args[0]), args[1]))
+    return desc
 
 
 def _nested_type(desc: Any) -> tuple[str | None, bool]:
