@@ -2,7 +2,8 @@
 their writer has matched the subscriptions the graph showed when they started (at most --match-wait s).
 Referee: a real rclpy node that subscribed before rostool started, counting what it heard, on Jazzy and
 Kilted, through both backends. Without the wait, a Fast DDS subscriber missed the first messages: 8/10 of
-a played bag, 3 of a 1 Hz `--ros2 topic pub` that ran 4.5 s."""
+a played bag, the first of a --start-offset play, the first pass of a --loop, 3 of a 1 Hz `--ros2 topic
+pub` that ran 4.5 s."""
 
 from __future__ import annotations
 
@@ -27,6 +28,32 @@ def test_play_and_pub_reach_a_subscriber_that_was_there_from_the_first_message(
     listener.wait_for("heard", lambda e: e["data"] == expected[-1], timeout=10)
     assert [e["data"] for e in listener.of("heard")] == expected
 
+    # --start-offset: exactly the messages from that bag time on, the first one included
+    heard = len(listener.of("heard"))
+    played = tool(
+        ["--ros2", "bag", "play", "-r", "5", "--start-offset", "2.25", "--topics", "/topic", str(TALKER)]
+    )
+    assert played.returncode == 0, played.stderr
+    from rostool.bag.reader import BagReader
+
+    with BagReader([TALKER]) as reader:
+        start = reader.start_ns
+        offset = [
+            reader.deserialize(raw, conn).data  # type: ignore[attr-defined]
+            for conn, stamp, raw in reader.messages(reader.select(["/topic"]))
+            if stamp >= start + 2.25e9
+        ]
+    listener.wait_for("heard", lambda _e: len(listener.of("heard")) - heard >= len(offset), timeout=10)
+    assert [e["data"] for e in listener.of("heard")[heard:]] == offset
+
+    # --loop: whole passes from the first message, until Ctrl+C
+    heard = len(listener.of("heard"))
+    loop = tool_popen(["--ros2", "bag", "play", "--loop", "-r", "10", "--topics", "/topic", str(TALKER)])
+    listener.wait_for("heard", lambda _e: len(listener.of("heard")) - heard >= 15, timeout=20)
+    stop(loop)
+    looped = [e["data"] for e in listener.of("heard")[heard:]]
+    assert looped == [expected[k % 10] for k in range(len(looped))], looped
+
     # ros2 topic pub's form (1 Hz until Ctrl+C): stopped 0.3 s after it said it published #3, the
     # listener must have heard all three
     pub = tool_popen(["--ros2", "topic", "pub", "/topic", "std_msgs/msg/String", "data: pub"])
@@ -35,8 +62,8 @@ def test_play_and_pub_reach_a_subscriber_that_was_there_from_the_first_message(
     time.sleep(0.3)
     _out, err = stop(pub)
     assert third, err
-    heard = [e for e in listener.of("heard") if e["data"] == "pub"]
-    assert len(heard) == 3, (heard, err)
+    said = [e for e in listener.of("heard") if e["data"] == "pub"]
+    assert len(said) == 3, (said, err)
 
 
 def test_a_subscriber_that_never_connects_is_named_in_one_warning(debian_master: dict[str, str]) -> None:

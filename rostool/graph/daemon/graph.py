@@ -1,7 +1,7 @@
 """`DaemonGraph`: the Graph protocol with its read-only queries answered by the user's graph daemon, its
 subscriptions relayed by it (echo, hz, bw, plot, and `bag record`'s: record_relay.py), its parameters and
-service calls made by it (calls.py: also lifecycle's and logger levels'), and everything else (pub, goals,
-serving) by a direct backend made on first need.
+service calls made by it (calls.py: also lifecycle's and logger levels'), its goals sent by it
+(goal_client.py), and everything else (pub, serving) by a direct backend made on first need.
 
 When no daemon answers, the query is answered directly (complete, as without a daemon) and a daemon is
 started detached for the next calls; a daemon that takes the connection but does not answer in time is
@@ -27,6 +27,8 @@ if TYPE_CHECKING:
     from rostool.graph.base import (
         ActionInfo,
         ActionSummary,
+        GoalOutcome,
+        GoalWatcher,
         Graph,
         NodeInfo,
         OnError,
@@ -186,6 +188,22 @@ class DaemonGraph:
         from rostool.graph.ros2_base.calls import call_service
 
         return call_service(host, name, values, wait, timeout)  # type: ignore[arg-type]
+
+    def send_goal(
+        self, name: str, kind: str | None, goal: Any, timeout: float | None, watcher: GoalWatcher
+    ) -> GoalOutcome:
+        """`action send-goal` sent by the daemon, whose graph knows the server already (goal_client.py); the
+        verb's watcher is told what a direct run tells it. Directly when no daemon serves."""
+
+        def directly() -> GoalOutcome:
+            return self.direct.send_goal(name, kind, goal, timeout, watcher)
+
+        def through() -> GoalOutcome:
+            from rostool.graph.daemon.goal_client import send_goal_through
+
+            return send_goal_through(self._client, name, kind, goal, timeout, watcher, directly)
+
+        return self._served(through, directly)  # type: ignore[no-any-return]
 
     def close(self) -> None:
         for relay in self._relays:

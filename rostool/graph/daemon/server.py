@@ -1,7 +1,8 @@
 """The daemon process: one long-lived graph of the selected backend, its read-only queries served on a
 Unix-domain socket (0600, in the user's 0700 directory); no TCP or UDP port of its own. It also relays
 subscriptions (relay_server.py): a verb's reader in this graph, its messages streamed to the verb; and
-makes service calls for verbs (call_server.py: parameters, `service call`, lifecycle, logger levels).
+makes service calls for verbs (call_server.py: parameters, `service call`, lifecycle, logger levels) and
+sends their goals (goal_server.py: `action send-goal`).
 
 Life: take the key's lock (held until exit: a second daemon of the same key waits or gives up), open the
 graph and let discovery settle, then bind the socket; clients meanwhile find the lock held and answer
@@ -28,6 +29,7 @@ from typing import IO, Any
 from rostool.errors import RostoolError
 from rostool.graph.daemon import wire
 from rostool.graph.daemon.call_server import Calls
+from rostool.graph.daemon.goal_server import GoalRun
 from rostool.graph.daemon.memory import memory
 from rostool.graph.daemon.place import DaemonPlace, build_id, daemon_place
 from rostool.graph.daemon.queries import SERVED
@@ -65,6 +67,7 @@ class Daemon:
         self.calls: Calls | None = None
         self.relays: set[Relay] = set()
         self.relays_lock = threading.Lock()
+        self.goals: set[GoalRun] = set()  # goals sent for verbs, running (under relays_lock)
         self.queries = 0  # graph queries answered (`daemon status` shows whether calls reach this daemon)
 
     # --- the graph -------------------------------------------------------------------------------
@@ -144,6 +147,22 @@ class Daemon:
                 self.relays.discard(relay)
             log.info("relay of %s closed", topic)
 
+    def goal(self, connection: socket.socket, request: dict[str, Any]) -> None:
+        """Serve a "goal" request: answer, then send the goal and stream its run until it ends."""
+        other = self._other_build(request)
+        if other is not None:
+            wire.send(connection, other)
+            return
+        self.queries += 1
+        run = GoalRun(self.graph, self.graph_lock, connection, self.backend)
+        with self.relays_lock:
+            self.goals.add(run)
+        try:
+            run.serve(request)
+        finally:
+            with self.relays_lock:
+                self.goals.discard(run)
+
     def status(self) -> dict[str, Any]:
         with self.graph_lock:
             size = {
@@ -170,7 +189,7 @@ class Daemon:
         threading.Thread(target=self._keep_current, name="poll", daemon=True).start()
         try:
             while not self.stopping.is_set():
-                if not self.relays and time.monotonic() - self.last_request > self.idle:
+                if not self.relays and not self.goals and time.monotonic() - self.last_request > self.idle:
                     log.info("idle for %g s: exiting", self.idle)
                     break
                 try:
@@ -208,6 +227,9 @@ class Daemon:
                 request = wire.receive(connection)
                 if isinstance(request, dict) and request.get("op") == "subscribe":
                     self.relay(connection, request)
+                    return
+                if isinstance(request, dict) and request.get("op") == "goal":
+                    self.goal(connection, request)
                     return
                 reply = self.answer(request) if isinstance(request, dict) else {"error": "bad request"}
                 wire.send(connection, reply)

@@ -14,6 +14,12 @@ WARNING and ERROR (one line of text), DIRECT (one line: the daemon cannot serve 
 the client then makes itself), READY (once: b"1" when the daemon's reader has matched every publisher it
 knew when it was made, b"0" when it knew none or one never matched in time: `bag record` starts its
 --duration clock on it).
+
+A goal (goal_server.py): {"op": "goal", "build": B, "action": A, "type": T or null, "goal": the goal's value,
+"timeout": S or null}, answered as a subscription is, then (once the client sent b"g") frames: TYPE as
+above, GOAL (JSON: one call of the goal's watcher, its messages as {"type", "cdr": base64}), and last
+OUTCOME (JSON: the goal's outcome, or {"interrupted": true} after a cancel the client asked for with b"c"
+or its end of the connection) or ERROR (the one line the goal's run failed with).
 """
 
 from __future__ import annotations
@@ -28,6 +34,7 @@ _HEADER = struct.Struct(">I")
 MAX_SAMPLE = 512 * 1024 * 1024  # a relayed message's bytes (a DDS sample is at most 4 GiB)
 _FRAME = struct.Struct(">IcQ")
 MESSAGE, TYPE, WARNING, ERROR, DIRECT, READY = b"m", b"t", b"w", b"e", b"d", b"r"
+GOAL, OUTCOME = b"g", b"o"  # a goal's frames (goal_server.py)
 _SMALL = 64 * 1024  # payloads up to this size go out in one write with their header
 
 

@@ -24,6 +24,7 @@ from rostool.graph.ros2_base.actions import (
     feedback_event,
     outcome,
     result_event,
+    stop_if_asked,
 )
 from rostool.graph.ros2_base.names import resolve
 from rostool.interfaces import ros2_action
@@ -49,11 +50,13 @@ def register_action(graph: RclpyHost, action_type: str) -> tuple[ActionTypes, An
     return found, cls
 
 
-def _wait(future: Any, deadline: float) -> bool:
-    """Wait for an rclpy future until `deadline` (monotonic); whether it is done."""
+def _wait(future: Any, deadline: float, watcher: Any = None) -> bool:
+    """Wait for an rclpy future until `deadline` (monotonic); whether it is done. A cancel the watcher's
+    owner asked for meanwhile raises KeyboardInterrupt (`stop_if_asked`)."""
     done = threading.Event()
     future.add_done_callback(lambda _f: done.set())
     while not done.wait(0.02):
+        stop_if_asked(watcher)
         if time.monotonic() >= deadline:
             return False
     return True
@@ -66,8 +69,9 @@ def _value(task: Any) -> Any:
     return task.result()
 
 
-def _server_ready(client: Any, deadline: float) -> bool:
+def _server_ready(client: Any, deadline: float, watcher: Any = None) -> bool:
     while not client.server_is_ready():
+        stop_if_asked(watcher)
         if time.monotonic() >= deadline:
             return False
         time.sleep(0.02)
@@ -117,15 +121,26 @@ class GoalRun:
 
     def run(self) -> GoalOutcome:
         from rclpy.action import ActionClient
+
+        graph, action = self.graph, self.action
+        client = ActionClient(graph.node, self.cls, action)
+        try:
+            return self._run(client)
+        finally:
+            # destroyed on the executor's thread, between two of its takes: a long-lived graph (the
+            # daemon's, sending goals for verbs) would otherwise keep every goal's client
+            with contextlib.suppress(Exception):  # the context is shut down already: so is the client
+                graph.context.on_executor(client.destroy)
+
+    def _run(self, client: Any) -> GoalOutcome:
         from unique_identifier_msgs.msg import UUID
 
         graph, watcher, action = self.graph, self.watcher, self.action
-        client = ActionClient(graph.node, self.cls, action)
         started = time.monotonic()
         limit = self.timeout if self.timeout is not None else float("inf")
-        if not _server_ready(client, started + min(limit, 1.0)):
+        if not _server_ready(client, started + min(limit, 1.0), watcher):
             watcher.waiting(WAITING)
-            if not _server_ready(client, started + limit):
+            if not _server_ready(client, started + limit, watcher):
                 raise RostoolError(f"no action server for {action} matched within {self.timeout:g} s")
         goal_id = uuid.uuid4().bytes
         hex_id = goal_id.hex()
@@ -138,22 +153,23 @@ class GoalRun:
             sending = graph.context.on_executor(
                 lambda: client.send_goal_async(goal, self._on_feedback, UUID(uuid=list(goal_id)))
             )
-            if not _wait(sending, started + limit):
+            if not _wait(sending, started + limit, watcher):
                 raise GoalTimeout(f"goal {hex_id} got no result within {self.timeout:g} s; canceled it")
             sent = _value(sending)
-            if not _wait(sent, started + limit):
+            if not _wait(sent, started + limit, watcher):
                 raise GoalTimeout(f"goal {hex_id} got no result within {self.timeout:g} s; canceled it")
             handle = sent.result()
             watcher.sent(hex_id, self.goal, bool(handle.accepted))
             if not handle.accepted:
                 return outcome(hex_id, None)
             asking = graph.context.on_executor(handle.get_result_async)
-            if not _wait(asking, started + limit):
+            if not _wait(asking, started + limit, watcher):
                 raise GoalTimeout(f"goal {hex_id} got no result within {self.timeout:g} s; canceled it")
             result_future = _value(asking)
             done = threading.Event()
             result_future.add_done_callback(lambda _f: done.set())
             while not done.wait(0.02):
+                stop_if_asked(watcher)
                 self._drain()
                 if time.monotonic() - started > limit and not done.is_set():
                     raise GoalTimeout(f"goal {hex_id} got no result within {self.timeout:g} s; canceled it")

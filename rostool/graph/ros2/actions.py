@@ -36,12 +36,15 @@ from rostool.graph.ros2_base.actions import (
     feedback_event,
     outcome,
     result_event,
+    stop_if_asked,
 )
 from rostool.graph.ros2_base.names import resolve, topic_to_dds
 from rostool.graph.ros2_base.qos import PROFILES, QosProfile
 from rostool.interfaces.ros2_action import register_action
 
 if TYPE_CHECKING:
+    from collections.abc import Callable
+
     from rostool.graph.base import GoalOutcome, GoalWatcher
     from rostool.graph.ros2.session import Session
     from rostool.graph.ros2_base.transport import Ros2Host
@@ -122,6 +125,15 @@ class ActionClient:
         request = build_message(self._store.store, CANCEL_SERVICE + "_Request", {"goal_info": info})
         return self._cancel.call(request, timeout)
 
+    def close(self) -> None:
+        """Delete its service clients and feedback reader: a long-lived graph (the daemon's, sending goals
+        for verbs) would otherwise keep every goal's endpoints until it ends."""
+        for client in (self._send_goal, self._get_result, self._cancel):
+            client.close()
+        feedback, self._feedback = self._feedback, None
+        if feedback is not None:
+            self._session.drop(feedback)
+
     def take_feedback(self, goal_id: bytes) -> list[Any]:
         """Feedback messages for `goal_id` received since the last call."""
         from cyclonedds._clayer import ddspy_take  # type: ignore[import-not-found]
@@ -151,12 +163,53 @@ def send_goal(
     """`ros2 action send_goal` through `session`: the goal is canceled first on timeout or Ctrl+C."""
     action = resolve(name)
     client = ActionClient(session, action, action_type(graph, action, kind))
+    # closed by the last of this call and its result thread (one still waiting after a cancel)
+    users = _Users(client.close)
+    try:
+        return _send_goal(client, users, action, value, timeout, watcher)
+    finally:
+        users.release()
+
+
+def _server_ready(client: ActionClient, deadline: float, watcher: GoalWatcher) -> bool:
+    """`wait_for_server` until `deadline` (monotonic), in slices: a cancel asked meanwhile is noticed."""
+    while not client.wait_for_server(min(max(deadline - time.monotonic(), 0.0), 0.1)):
+        stop_if_asked(watcher)
+        if time.monotonic() >= deadline:
+            return False
+    return True
+
+
+class _Users:
+    """Calls `close` once every user has released (a counted hold, for a thread that may outlive us)."""
+
+    def __init__(self, close: Callable[[], None]) -> None:
+        self._close = close
+        self._count = 1
+        self._lock = threading.Lock()
+
+    def hold(self) -> None:
+        with self._lock:
+            self._count += 1
+
+    def release(self) -> None:
+        with self._lock:
+            self._count -= 1
+            last = self._count == 0
+        if last:
+            with contextlib.suppress(Exception):  # the participant is gone already: so are they
+                self._close()
+
+
+def _send_goal(
+    client: ActionClient, users: _Users, action: str, value: Any, timeout: float | None, watcher: GoalWatcher
+) -> GoalOutcome:
     goal = client.build_goal(value)  # bad values fail here, before anything is sent
     started = time.monotonic()
     limit = timeout if timeout is not None else float("inf")
-    if not client.wait_for_server(min(limit, 1.0)):
+    if not _server_ready(client, started + min(limit, 1.0), watcher):
         watcher.waiting(WAITING)
-        if not client.wait_for_server(max(limit - (time.monotonic() - started), 0.0)):
+        if not _server_ready(client, started + limit, watcher):
             raise RostoolError(f"no action server for {action} matched within {timeout:g} s")
     goal_id = uuid.uuid4().bytes
     hex_id = goal_id.hex()
@@ -169,8 +222,11 @@ def send_goal(
             box["response"] = client.result(goal_id, float("inf"))
         except RostoolError as err:  # pragma: no cover - the server vanished
             box["error"] = err
+        except Exception:  # its client closed under it (the graph closing): nothing to report
+            pass
         finally:
             finished.set()
+            users.release()
 
     fetching = False
     # One try from the moment the goal may reach the server: it must not run on after a Ctrl+C, even one
@@ -180,9 +236,11 @@ def send_goal(
         watcher.sent(hex_id, goal, accepted)
         if not accepted:
             return outcome(hex_id, None)
+        users.hold()
         threading.Thread(target=fetch, name=f"result of {action}", daemon=True).start()
         fetching = True
         while not finished.wait(0.02):
+            stop_if_asked(watcher)
             for feedback in client.take_feedback(goal_id):
                 watcher.event(feedback_event(feedback))
             if time.monotonic() - started > limit and not finished.is_set():

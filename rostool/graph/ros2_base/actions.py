@@ -32,6 +32,16 @@ class GoalTimeout(RostoolError):
     pass
 
 
+def stop_if_asked(watcher: Any) -> None:
+    """Raise KeyboardInterrupt, as Ctrl+C does, when the watcher's owner asked for the goal's cancel (the
+    graph daemon running a goal for a verb whose user pressed Ctrl+C: `cancel_asked`, an Event); each
+    backend's wait loops call it, so the cancel takes the direct Ctrl+C's way at a point where the run
+    holds nothing."""
+    asked = getattr(watcher, "cancel_asked", None)
+    if asked is not None and asked.is_set():
+        raise KeyboardInterrupt
+
+
 def status_name(status: int) -> str:
     return STATUS_NAMES.get(status, f"status {status}")
 
