@@ -121,7 +121,10 @@ class ServedLater:
         self._thread.start()
 
     def _make(self, make: Callable[[], Served]) -> None:
-        self._served = make()
+        # the verb may end under it (Ctrl+C while starting: its graph closed); `serve` says in one line why
+        # a service itself could not be made
+        with contextlib.suppress(Exception):
+            self._served = make()
 
     def close(self) -> None:
         self._thread.join(MAKE_SECONDS)

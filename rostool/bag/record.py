@@ -412,10 +412,20 @@ class Recorder:
         """Record until `stop` is set (or --duration/--size ends it, or a write fails)."""
         options = self.options
         self._stop = stop
+        # The writer thread owns the files from opening to closing (sqlite connections are per thread).
+        # Its modules are imported here first: an import it shared with this thread could wait on a module
+        # lock that an interrupted import here left held.
+        if self.fmt != "bag" or options.rosbag2 is not None:
+            import rosbags.rosbag2  # noqa: F401
         writer = threading.Thread(target=self._writer_main, name="bag-writer", daemon=True)
+        writer.start()
+        # The bag is open before anything is subscribed: a message the recorder took is on disk within
+        # FLUSH_INTERVAL (a chunk's second in .mcap), never held while the bag is still being made.
+        self._opened.wait()
+        if self._open_error is not None:
+            writer.join()
+            raise self._open_error
         try:
-            # Subscribed first: the first messages wait in the queue while the file is opened (a relayed
-            # topic's first message comes 0.05-0.1 s after its subscription, sooner than the bag is ready).
             if options.use_sim_time:
                 self._follow_clock()
             for name, type_name in self._static.items():  # first: a topic also named or found takes its type
@@ -425,15 +435,6 @@ class Recorder:
                     name = self.source.resolve(topic)
                     if self.exclude is None or not self.exclude.fullmatch(name):
                         self._subscribe(name)
-            # The writer thread owns the files from opening to closing (sqlite connections are per
-            # thread). Its modules are imported here first: an import it shared with this thread could
-            # wait on a module lock that an interrupted import here left held.
-            if self.fmt != "bag" or options.rosbag2 is not None:
-                import rosbags.rosbag2  # noqa: F401
-            writer.start()
-            self._opened.wait()
-            if self._open_error is not None:
-                raise self._open_error
             discovering = bool(options.all_topics or options.regex or options.node or options.wanted)
             if discovering:  # the topics the source shows already (a daemon: all) count from the start
                 self._discover()
@@ -465,8 +466,7 @@ class Recorder:
             self.source.close()  # unregister now; nothing more arrives
             self._finishing.set()
             self.queue.ready.set()
-            if writer.is_alive():
-                writer.join()
+            writer.join()
         if self._discover_error is not None:
             raise self._discover_error
         self.result.dropped = dict(self.queue.dropped)

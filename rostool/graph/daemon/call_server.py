@@ -3,10 +3,10 @@ the daemon's graph already knows every server, so a client it makes matches in m
 it keeps answers the next call at once; the verb's process never joins the graph.
 
 Requests (wire.py's JSON): {"op": "call_open", "service", "type"} -> the request and response type names
-with their .msg definitions (the verb registers those it lacks); {"op": "call_wait", ..., "timeout"} ->
-whether a server matched; {"op": "call", ..., "request": CDR (base64), "timeout", "forever"} -> the reply's
-CDR (base64). A backend's one-line error (no server, a timeout, a type nobody describes) is the answer's
-"error", raised in the verb as it would have been raised there.
+with rosbags' field definitions of them and of what they nest (the verb registers those it lacks);
+{"op": "call_wait", ..., "timeout"} -> whether a server matched; {"op": "call", ..., "request": CDR
+(base64), "timeout", "forever"} -> the reply's CDR (base64). A backend's one-line error (no server, a
+timeout, a type nobody describes) is the answer's "error", raised in the verb as it would be raised there.
 
 Clients are pooled per (service, type): one call at a time each (a Fast DDS server's replies are paired
 with requests only that way: ros2/services.py), a second client while one is busy, and an idle one is
@@ -23,6 +23,7 @@ import time
 from typing import Any
 
 from rostool.errors import RostoolError
+from rostool.graph.daemon.relay_server import _closure
 
 IDLE_SECONDS = 10.0  # an idle client of the daemon's is closed after this long
 KEEP_IDLE = 2  # idle clients kept per (service, type)
@@ -56,16 +57,13 @@ class Calls:
         def described(client: Any) -> dict[str, Any]:
             request = str(client.request_type)
             response = request.removesuffix("_Request") + "_Response"
-            definitions = {name: self._definition(name) for name in (request, response)}
-            return {"request": request, "response": response, "definitions": definitions}
+            fielddefs = self._graph.types.store.fielddefs
+            # rosbags' own field definitions, not .msg text: the text loses a `byte` and a `char` to
+            # `uint8` (a request printed `byte_value=0` where the direct way prints `b'\x00'`)
+            found = {**_closure(fielddefs, request), **_closure(fielddefs, response)}
+            return {"request": request, "response": response, "fielddefs": found}
 
         return self._use(key, described)  # type: ignore[no-any-return]
-
-    def _definition(self, type_name: str) -> str:
-        try:
-            return str(self._graph.types.store.generate_msgdef(type_name, ros_version=2)[0])
-        except Exception:  # a definition rosbags cannot write out: the verb's own types decide
-            return ""
 
     def _call(self, client: Any, payload: bytes, timeout: float, forever: bool) -> str:
         store = self._graph.types.store

@@ -3,7 +3,7 @@ the shared parameter and call code (ros2_base/params.py, ros2_base/calls.py) ask
 the daemon, so `param get`, `service call`, lifecycle and logger-level calls take the time of the call
 itself and never join the graph (measured: 0.95-1.0 s on the DDS backend and 2.2-4.1 s on the rclpy one
 before, with their own participant). Requests are built and replies decoded with this process's types;
-the daemon sends the definitions of the types it calls with, for those this process lacks.
+the daemon sends rosbags' field definitions of the types it calls with, for those this process lacks.
 """
 
 from __future__ import annotations
@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any
 
 from rostool.errors import RostoolError
 from rostool.graph.daemon.client import ANSWER_SECONDS, DaemonAbsent, DaemonClient, DaemonSilent, OtherBuild
+from rostool.graph.daemon.relay_client import _fielddefs_from_json
 from rostool.graph.ros2_base.calls import DEFAULT_REPLY_TIMEOUT
 from rostool.graph.ros2_base.names import resolve
 from rostool.interfaces.ros2_types import Ros2Types
@@ -28,10 +29,12 @@ _GONE = (DaemonAbsent, DaemonSilent, OtherBuild)
 class DaemonCallHost:
     """The part of a ROS 2 graph that parameters and service calls use, through the daemon."""
 
-    def __init__(self, graph: DaemonGraph, client: DaemonClient, distro: str) -> None:
+    def __init__(
+        self, graph: DaemonGraph, client: DaemonClient, distro: str, types: Ros2Types | None = None
+    ) -> None:
         self._graph = graph
         self._client = client
-        self.types: Ros2Types = CallTypes(distro)
+        self.types: Ros2Types = types if types is not None else CallTypes(distro)
 
     def resolve(self, name: str) -> str:
         return resolve(name)
@@ -85,24 +88,25 @@ class DaemonServiceClient:
         described = self._ask({"op": "call_open"}, ANSWER_SECONDS)
         self.request_type = str(described["request"])
         self._response_type = str(described["response"])
-        self._learn(described.get("definitions") or {})
+        self._learn(described.get("fielddefs") or {})
 
-    def _learn(self, definitions: dict[str, str]) -> None:
-        """The request and response types: this process's own (built in, or from its interface sources, as a
-        direct client finds them), else the daemon's definitions (a type its distro or graph knew)."""
-        from rosbags.typesys import get_types_from_msg
-
+    def _learn(self, fielddefs: dict[str, Any]) -> None:
+        """The request and response types and what they nest: this process's own first (built in, or from
+        its interface sources, as a direct client finds them: a .srv's `byte` stays a byte, where a daemon
+        that learned the type from the server's description has `uint8`), then the daemon's definitions
+        of what is still missing (a type only the daemon's graph or distro knew)."""
         from rostool.interfaces.ros2_srv import register_service
 
-        for name, text in definitions.items():
-            if text and not self._types.in_store(name):
-                with contextlib.suppress(Exception):  # unparsable: this process's own sources may know it
-                    found = get_types_from_msg(text, name)
-                    # rosbags names a `pkg/srv/T_Request` it parses `pkg/srv/msg/T_Request`
-                    self._types.register({_service_name(key): value for key, value in found.items()})
-        if not self._types.in_store(self.request_type):
-            with contextlib.suppress(RostoolError):  # the line below says what is missing
-                register_service(self._types, self._srv_type)
+        with contextlib.suppress(RostoolError):  # not known here: the daemon's definitions are
+            register_service(self._types, self._srv_type)
+        with contextlib.suppress(Exception):  # not readable: the line below says what is missing
+            found = _fielddefs_from_json(fielddefs)
+            missing = {n: defs for n, defs in found.items() if not self._types.in_store(n)}
+            for name in list(missing):
+                with contextlib.suppress(Exception):  # a broken source file: the daemon's definition
+                    if self._types.knows(name):  # from this process's sources
+                        del missing[name]
+            self._types.register({n: defs for n, defs in missing.items() if not self._types.in_store(n)})
         if not self._types.in_store(self.request_type):
             raise RostoolError(f"cannot build a request of {self._srv_type}: its definition is unknown here")
 

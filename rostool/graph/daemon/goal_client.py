@@ -157,7 +157,8 @@ class GoalFollower:
             return
         with contextlib.suppress(Exception):  # unparsable: this process's own sources may know it
             if fielddefs:
-                self._types.register(_fielddefs_from_json(fielddefs))
+                found = _fielddefs_from_json(fielddefs)
+                self._types.register({n: defs for n, defs in found.items() if not self._types.in_store(n)})
             elif text:
                 # rosbags names a `pkg/action/X_Goal` it parses `pkg/action/msg/X_Goal`
                 found = get_types_from_msg(text, name)

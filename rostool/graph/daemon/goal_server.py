@@ -225,12 +225,9 @@ class StreamingWatcher:
 
 
 def _described(store: Any, type_name: str) -> bytes:
-    """As a relay describes a type (relay_server.py): its .msg definition, or rosbags' field definitions of it
-    and of every type it nests where rosbags writes no .msg text (an action's `pkg/action/X_Goal`)."""
+    """A type as rosbags' field definitions of it and of every type it nests (relay_server's `_closure`):
+    .msg text would lose a `byte` or a `char` to `uint8`, and rosbags writes none for `pkg/action/X_Goal`."""
     described: dict[str, Any] = {"name": type_name, "definition": ""}
-    try:
-        described["definition"] = store.generate_msgdef(type_name, ros_version=2)[0]
-    except Exception:
-        with contextlib.suppress(Exception):  # neither: the verb's own types decide
-            described["fielddefs"] = _closure(store.fielddefs, type_name)
+    with contextlib.suppress(Exception):  # none: the verb's own types decide
+        described["fielddefs"] = _closure(store.fielddefs, type_name)
     return json.dumps(described).encode()

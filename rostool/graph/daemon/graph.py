@@ -169,7 +169,10 @@ class DaemonGraph:
             return None
         from rostool.graph.daemon.calls import DaemonCallHost
 
-        return DaemonCallHost(self, self._client, distro)
+        # types the verb made already (a renderer's field lookup holds their store: the call's types must
+        # land there), else a store of the call's types only (calls.CallTypes)
+        made = self._direct.types if self._direct is not None else self._types
+        return DaemonCallHost(self, self._client, distro, made)
 
     def parameters(self, node: str | None, timeout: float = 5.0) -> Parameters:
         host = self._call_host()
