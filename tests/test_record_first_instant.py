@@ -1,7 +1,7 @@
 """`bag record` from the first instant (issue 37): while a graph daemon serves, a recording's topics come
 through relays, readers in the daemon's graph that already knows their publishers, so the recorder does
 not wait for its own participant to be discovered and matched (measured without: the first message
-0.6-3.7 s after start; with: 0.35-0.65 s, bench/RESULTS.md). Referee: real rclpy talkers (Jazzy, Kilted)
+1.0-3.7 s after start; with: 0.65-0.85 s, bench/RESULTS.md). Referee: real rclpy talkers (Jazzy, Kilted)
 on both backends: the talkers see only the daemon's reader (never the recorder's own participant), the bag
 holds every message from the one published as that reader matched, without a gap, read back by rosbags,
 with the publishers' QoS (a latched talker's transient_local) in its metadata; -a finds the topics in the
