@@ -11,7 +11,7 @@ from __future__ import annotations
 import base64
 import contextlib
 import math
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 from rostool.errors import RostoolError
 from rostool.graph.daemon.client import ANSWER_SECONDS, DaemonAbsent, DaemonClient, DaemonSilent, OtherBuild
@@ -21,7 +21,16 @@ from rostool.graph.ros2_base.names import resolve
 from rostool.interfaces.ros2_types import Ros2Types
 
 if TYPE_CHECKING:
-    from rostool.graph.daemon.graph import DaemonGraph
+    from collections.abc import Sequence
+
+
+class GraphListings(Protocol):
+    """What the call host asks of the graph it serves (a DaemonGraph: its daemon's answers)."""
+
+    def services(self) -> Sequence[tuple[str, str | None, Sequence[str]]]: ...
+
+    def node_names(self) -> list[str]: ...
+
 
 _GONE = (DaemonAbsent, DaemonSilent, OtherBuild)
 
@@ -30,7 +39,7 @@ class DaemonCallHost:
     """The part of a ROS 2 graph that parameters and service calls use, through the daemon."""
 
     def __init__(
-        self, graph: DaemonGraph, client: DaemonClient, distro: str, types: Ros2Types | None = None
+        self, graph: GraphListings, client: DaemonClient, distro: str, types: Ros2Types | None = None
     ) -> None:
         self._graph = graph
         self._client = client

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import threading
 import time
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 from rostool.errors import RostoolError
 from rostool.graph.recording import Encoding, Put, subscribed_by
@@ -26,17 +26,33 @@ from rostool.interfaces.names import hidden_name
 if TYPE_CHECKING:
     from collections.abc import Callable
 
-    from rostool.graph.base import Received, Subscription
-    from rostool.graph.daemon.graph import DaemonGraph
+    from rostool.graph.base import OnError, OnMessage, Received, Subscription, TopicEndpoint, TopicInfo
     from rostool.graph.ros2_base.recording import Ros2Source
 
 READY_POLL = 0.005
 
 
+class RelayingGraph(Protocol):
+    """What the relayed source asks of the graph it records from (a DaemonGraph)."""
+
+    types: Any
+    direct: Any  # the direct graph, made on first use (static topics)
+
+    def resolve(self, name: str) -> str: ...
+
+    def topics(self) -> list[TopicInfo]: ...
+
+    def topic_endpoints(self, name: str) -> list[TopicEndpoint]: ...
+
+    def relayed_subscription(
+        self, topic: str, on_message: OnMessage, on_error: OnError, warn: Callable[[str], None]
+    ) -> Subscription: ...
+
+
 class RelayedRecordSource:
     encoding: Encoding = "cdr"
 
-    def __init__(self, graph: DaemonGraph, warn: Callable[[str], None], include_hidden: bool) -> None:
+    def __init__(self, graph: RelayingGraph, warn: Callable[[str], None], include_hidden: bool) -> None:
         self.graph = graph
         self.warn = warn
         self.include_hidden = include_hidden
