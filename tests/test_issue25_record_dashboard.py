@@ -50,7 +50,9 @@ def test_max_rate_throttles_one_topic_and_progress_lines_when_piped(
         # while to deliver: issue 37's subject, not this test's), then two seconds and more of both
         writing = re.compile(r"[1-9]\d* msgs on 2 topics")
         assert recorder.wait_for(lambda out: bool(writing.search(out)), 30), recorder.stdout
-        published_after(other, published_after(other, 0) + 40)
+        # 40 more than the talker has said so far (not than its first report: a recorder that took long to
+        # start would find those 40 in the past and be stopped at once)
+        published_after(other, max((e["count"] for e in other.of("published")), default=0) + 40)
     finally:
         recorder.stop()
     assert re.search(r"rostool: recording \S+: \d+ msgs on 2 topics", recorder.stdout), recorder.stdout
