@@ -147,7 +147,3 @@ class DaemonServiceClient:
                 f"the graph daemon did not finish the call of {self.service}{maybe}: {err}; call again, "
                 "or with --no-daemon"
             ) from None
-
-
-def _service_name(name: str) -> str:
-    return name.replace("/srv/msg/", "/srv/").replace("/action/msg/", "/action/")

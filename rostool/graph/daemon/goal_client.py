@@ -26,7 +26,7 @@ from typing import Any
 from rostool.errors import RostoolError
 from rostool.graph.base import GoalEvent, GoalOutcome, GoalWatcher
 from rostool.graph.daemon import wire
-from rostool.graph.daemon.calls import CallTypes, _service_name
+from rostool.graph.daemon.calls import CallTypes
 from rostool.graph.daemon.client import ANSWER_SECONDS, DaemonClient, DaemonSilent, NotRelayed
 from rostool.graph.daemon.relay_client import _fielddefs_from_json
 from rostool.graph.ros2_base.names import resolve
@@ -146,23 +146,15 @@ class GoalFollower:
         return self._types.store.deserialize_cdr(base64.b64decode(message["cdr"]), message["type"])
 
     def _learn(self, payload: bytes) -> None:
-        """A type of the goal's messages from the daemon's description (relay_server's): its .msg text, or
-        rosbags' field definitions where rosbags writes none (an action's `pkg/action/X_Goal`)."""
-        from rosbags.typesys import get_types_from_msg
-
+        """A type of the goal's messages from the daemon's description (goal_server's): rosbags' field
+        definitions of it and of what it nests, those this process lacks."""
         described = json.loads(payload)
-        name, text = str(described["name"]), str(described.get("definition") or "")
-        fielddefs = described.get("fielddefs")
+        name = str(described["name"])
         if self._types.in_store(name):
             return
-        with contextlib.suppress(Exception):  # unparsable: this process's own sources may know it
-            if fielddefs:
-                found = _fielddefs_from_json(fielddefs)
-                self._types.register({n: defs for n, defs in found.items() if not self._types.in_store(n)})
-            elif text:
-                # rosbags names a `pkg/action/X_Goal` it parses `pkg/action/msg/X_Goal`
-                found = get_types_from_msg(text, name)
-                self._types.register({_service_name(key): value for key, value in found.items()})
+        with contextlib.suppress(Exception):  # unreadable: this process's own sources may know it
+            found = _fielddefs_from_json(described.get("fielddefs") or {})
+            self._types.register({n: defs for n, defs in found.items() if not self._types.in_store(n)})
         if not self._types.in_store(name):
             with contextlib.suppress(Exception):  # the decoder names the type when it is still unknown
                 self._types.knows(name)
